@@ -1,0 +1,165 @@
+//! The tracker's configuration and its validation.
+
+use crate::error::{ConfigError, ParamProblem};
+use crate::filter::{Dynamics, Resampling};
+use crate::histogram::{Binning, Sampling};
+use crate::likelihood::{Likelihood, Sigma};
+use crate::scalar::Real;
+
+/// Everything that tunes a [`crate::Tracker`]. Start from [`Config::default`]
+/// and change fields; [`Config::validate`] (called by the tracker's
+/// constructor) rejects NaN, infinite and out-of-range values with a
+/// [`ConfigError`] naming the field.
+///
+/// ```
+/// use pftrack::{Config, Sigma};
+/// let mut c = Config::default();
+/// c.likelihood.sigma = Sigma::Fixed(Real::NAN);
+/// # use pftrack::Real;
+/// assert_eq!(c.validate().unwrap_err().field, "likelihood.sigma");
+/// ```
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Config {
+    /// Colour quantisation of the histograms.
+    pub binning: Binning,
+    /// Which pixels of each region are read.
+    pub sampling: Sampling,
+    /// From Bhattacharyya distance to weight.
+    pub likelihood: Likelihood,
+    /// Resampling scheme.
+    pub resampling: Resampling,
+    /// Process noise of the constant-velocity model.
+    pub dynamics: Dynamics,
+    /// Model adaptation rate `α` in `[0, 1]`: `q ← (1 − α) q + α p_E[S]`.
+    /// 0 keeps the initial model forever.
+    pub alpha: Real,
+    /// The model is updated only when the mean state's likelihood
+    /// `π_E[S] = exp(−d²/(2σ²))` (without the floor, with this frame's σ)
+    /// exceeds this, in `[0, 1]`, so occluded frames do not pollute it.
+    pub update_threshold: Real,
+    /// A particle "appears" (sees the target) when its `ρ` exceeds the
+    /// background mean by this many background standard deviations (the paper's 2).
+    pub appearance_sigmas: Real,
+    /// The kick-off fraction `b` in `(0, 1]`: tracking starts when more than
+    /// `b · N` particles appear, and a frame with at most `b · N` counts as a miss.
+    pub kickoff: Real,
+    /// Consecutive misses after which a tracked target is declared lost (1 to 1000).
+    pub lost_after: u16,
+    /// While searching or lost, this fraction of particles, in `[0, 1]`, is
+    /// re-drawn uniformly over the frame each step, so the search keeps
+    /// exploring instead of settling on the best background match.
+    pub reseed_fraction: Real,
+    /// Smallest half axis a particle may have, in pixels (at least 1).
+    pub min_half_axis: Real,
+}
+
+impl Default for Config {
+    /// The defaults: the first paper's filter (RGB 8x8x8, σ = 0.2, α = 0.1,
+    /// π_T = 0.15, b = 0.1) with the noise levels of the reference
+    /// implementation in DESIGN.md §5.
+    fn default() -> Self {
+        Config {
+            binning: Binning::Rgb8x8x8,
+            sampling: Sampling::Full,
+            likelihood: Likelihood { sigma: Sigma::Fixed(0.2), eps: 0.0 },
+            resampling: Resampling::Systematic,
+            dynamics: Dynamics {
+                position_noise: 0.10,
+                velocity_noise: 0.05,
+                scale_noise: 0.01,
+                scale_rate_noise: 0.0,
+            },
+            alpha: 0.1,
+            update_threshold: 0.15,
+            appearance_sigmas: 2.0,
+            kickoff: 0.1,
+            lost_after: 3,
+            reseed_fraction: 0.25,
+            min_half_axis: 2.0,
+        }
+    }
+}
+
+fn check(field: &'static str, v: Real, lo: Real, hi: Real) -> Result<(), ConfigError> {
+    if !v.is_finite() {
+        return Err(ConfigError { field, problem: ParamProblem::NonFinite });
+    }
+    if !(v >= lo && v <= hi) {
+        return Err(ConfigError { field, problem: ParamProblem::OutOfRange });
+    }
+    Ok(())
+}
+
+fn positive(field: &'static str, v: Real, hi: Real) -> Result<(), ConfigError> {
+    check(field, v, 0.0, hi)?;
+    if v > 0.0 { Ok(()) } else { Err(ConfigError { field, problem: ParamProblem::OutOfRange }) }
+}
+
+impl Config {
+    /// Checks every field against its documented range.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        match self.likelihood.sigma {
+            Sigma::Fixed(s) => positive("likelihood.sigma", s, 10.0)?,
+            Sigma::Adaptive { min, max } => {
+                positive("likelihood.sigma.min", min, 10.0)?;
+                positive("likelihood.sigma.max", max, 10.0)?;
+                if min > max {
+                    return Err(ConfigError { field: "likelihood.sigma.max", problem: ParamProblem::OutOfRange });
+                }
+            }
+        }
+        check("likelihood.eps", self.likelihood.eps, 0.0, 1.0)?;
+        let d = &self.dynamics;
+        check("dynamics.position_noise", d.position_noise, 0.0, 10.0)?;
+        check("dynamics.velocity_noise", d.velocity_noise, 0.0, 10.0)?;
+        check("dynamics.scale_noise", d.scale_noise, 0.0, 0.5)?;
+        check("dynamics.scale_rate_noise", d.scale_rate_noise, 0.0, 0.1)?;
+        check("alpha", self.alpha, 0.0, 1.0)?;
+        check("update_threshold", self.update_threshold, 0.0, 1.0)?;
+        check("appearance_sigmas", self.appearance_sigmas, 0.0, 100.0)?;
+        positive("kickoff", self.kickoff, 1.0)?;
+        if self.lost_after == 0 || self.lost_after > 1000 {
+            return Err(ConfigError { field: "lost_after", problem: ParamProblem::OutOfRange });
+        }
+        check("reseed_fraction", self.reseed_fraction, 0.0, 1.0)?;
+        check("min_half_axis", self.min_half_axis, 1.0, (crate::frame::MAX_DIMENSION / 2) as Real)?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_is_valid() {
+        assert_eq!(Config::default().validate(), Ok(()));
+    }
+
+    #[test]
+    fn each_bad_field_is_named() {
+        let cases: [(fn(&mut Config), &str, ParamProblem); 12] = [
+            (|c| c.likelihood.sigma = Sigma::Fixed(0.0), "likelihood.sigma", ParamProblem::OutOfRange),
+            (|c| c.likelihood.sigma = Sigma::Fixed(-1.0), "likelihood.sigma", ParamProblem::OutOfRange),
+            (|c| c.likelihood.sigma = Sigma::Fixed(Real::INFINITY), "likelihood.sigma", ParamProblem::NonFinite),
+            (
+                |c| c.likelihood.sigma = Sigma::Adaptive { min: 0.5, max: 0.1 },
+                "likelihood.sigma.max",
+                ParamProblem::OutOfRange,
+            ),
+            (|c| c.likelihood.eps = Real::NAN, "likelihood.eps", ParamProblem::NonFinite),
+            (|c| c.dynamics.position_noise = -0.1, "dynamics.position_noise", ParamProblem::OutOfRange),
+            (|c| c.dynamics.scale_noise = 1e9, "dynamics.scale_noise", ParamProblem::OutOfRange),
+            (|c| c.alpha = 1.5, "alpha", ParamProblem::OutOfRange),
+            (|c| c.kickoff = 0.0, "kickoff", ParamProblem::OutOfRange),
+            (|c| c.lost_after = 0, "lost_after", ParamProblem::OutOfRange),
+            (|c| c.reseed_fraction = Real::NEG_INFINITY, "reseed_fraction", ParamProblem::NonFinite),
+            (|c| c.min_half_axis = 0.5, "min_half_axis", ParamProblem::OutOfRange),
+        ];
+        for (mutate, field, problem) in cases {
+            let mut c = Config::default();
+            mutate(&mut c);
+            assert_eq!(c.validate(), Err(ConfigError { field, problem }));
+        }
+    }
+}

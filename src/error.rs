@@ -1,0 +1,174 @@
+//! Typed errors. Nothing in the core panics on bad input: every check that
+//! input can fail returns one of these.
+
+use core::fmt;
+
+/// Why a buffer could not be viewed as a [`crate::Frame`].
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum FrameError {
+    /// Width or height is zero.
+    ZeroSize,
+    /// Width or height exceeds [`crate::frame::MAX_DIMENSION`].
+    TooLarge {
+        /// The requested width.
+        width: usize,
+        /// The requested height.
+        height: usize,
+    },
+    /// The stride is shorter than one row of pixels.
+    StrideTooSmall {
+        /// The requested stride in bytes.
+        stride: usize,
+        /// The bytes one row of pixels needs.
+        row_bytes: usize,
+    },
+    /// The buffer is shorter than the dimensions require.
+    BufferTooSmall {
+        /// Bytes needed (`usize::MAX` if the product overflows).
+        needed: usize,
+        /// Bytes given.
+        got: usize,
+    },
+    /// YUV 4:2:2 stores pixels in pairs, so the width must be even.
+    OddYuvWidth {
+        /// The requested width.
+        width: usize,
+    },
+}
+
+/// What is wrong with one configuration field.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum ParamProblem {
+    /// NaN or infinite.
+    NonFinite,
+    /// Outside its documented range.
+    OutOfRange,
+}
+
+/// A rejected [`crate::Config`] field.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct ConfigError {
+    /// The field's name, as spelled in [`crate::Config`].
+    pub field: &'static str,
+    /// What is wrong with it.
+    pub problem: ParamProblem,
+}
+
+/// Why a box cannot be tracked in a frame.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum RegionError {
+    /// A coordinate or size is NaN or infinite.
+    NonFinite,
+    /// Width or height is zero or negative.
+    EmptyBox,
+    /// Wider or taller than the frame.
+    LargerThanFrame,
+    /// The box does not overlap the frame at all.
+    OutsideFrame,
+    /// The box's ellipse contains no pixel of the frame, so it has no colour
+    /// histogram to learn.
+    NoPixels,
+}
+
+/// Every error the tracker can return.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub enum Error {
+    /// The frame view is inconsistent.
+    Frame(FrameError),
+    /// The configuration is invalid.
+    Config(ConfigError),
+    /// The initial box is unusable.
+    Region(RegionError),
+    /// [`crate::Tracker::step`] was called before the tracker was
+    /// initialised from a box or given a target to search for.
+    NotInitialised,
+    /// The frame's size differs from the frame the tracker was initialised on.
+    /// Re-initialise to change resolution.
+    FrameSizeChanged {
+        /// The size the tracker was initialised with.
+        expected: (usize, usize),
+        /// The size of the frame given.
+        got: (usize, usize),
+    },
+}
+
+impl From<FrameError> for Error {
+    fn from(e: FrameError) -> Self {
+        Error::Frame(e)
+    }
+}
+
+impl From<ConfigError> for Error {
+    fn from(e: ConfigError) -> Self {
+        Error::Config(e)
+    }
+}
+
+impl From<RegionError> for Error {
+    fn from(e: RegionError) -> Self {
+        Error::Region(e)
+    }
+}
+
+impl fmt::Display for FrameError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            FrameError::ZeroSize => write!(f, "frame width or height is zero"),
+            FrameError::TooLarge { width, height } => write!(
+                f,
+                "frame {width}x{height} exceeds the maximum of {0}x{0}",
+                crate::frame::MAX_DIMENSION
+            ),
+            FrameError::StrideTooSmall { stride, row_bytes } => {
+                write!(f, "stride {stride} is shorter than a row of {row_bytes} bytes")
+            }
+            FrameError::BufferTooSmall { needed, got } => {
+                write!(f, "frame buffer holds {got} bytes but the dimensions need {needed}")
+            }
+            FrameError::OddYuvWidth { width } => write!(f, "YUV 4:2:2 needs an even width, got {width}"),
+        }
+    }
+}
+
+impl fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.problem {
+            ParamProblem::NonFinite => write!(f, "config field `{}` is NaN or infinite", self.field),
+            ParamProblem::OutOfRange => write!(f, "config field `{}` is out of range", self.field),
+        }
+    }
+}
+
+impl fmt::Display for RegionError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let s = match self {
+            RegionError::NonFinite => "box has a NaN or infinite coordinate",
+            RegionError::EmptyBox => "box has zero or negative width or height",
+            RegionError::LargerThanFrame => "box is larger than the frame",
+            RegionError::OutsideFrame => "box lies entirely outside the frame",
+            RegionError::NoPixels => "box's ellipse contains no pixel of the frame",
+        };
+        f.write_str(s)
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Frame(e) => write!(f, "bad frame: {e}"),
+            Error::Config(e) => write!(f, "bad configuration: {e}"),
+            Error::Region(e) => write!(f, "bad box: {e}"),
+            Error::NotInitialised => write!(f, "tracker not initialised: call init or search first"),
+            Error::FrameSizeChanged { expected, got } => write!(
+                f,
+                "frame is {}x{} but the tracker was initialised on {}x{}",
+                got.0, got.1, expected.0, expected.1
+            ),
+        }
+    }
+}
+
+impl core::error::Error for FrameError {}
+impl core::error::Error for ConfigError {}
+impl core::error::Error for RegionError {}
+impl core::error::Error for Error {}

@@ -1,0 +1,327 @@
+//! Borrowed views of raw camera frames.
+//!
+//! A [`Frame`] is a checked window onto a byte buffer as a camera or DMA
+//! engine wrote it: width, height, a row stride in bytes (rows may be padded),
+//! and a [`PixelFormat`]. Construction validates every dimension against the
+//! buffer once, so the pixel loops afterwards only need cheap, non-panicking
+//! slice accesses.
+
+use crate::error::FrameError;
+
+/// The largest accepted width or height, in pixels.
+///
+/// It keeps every histogram sum below `2^32` (see [`crate::scalar::KERNEL_ONE`])
+/// and every coordinate product inside `i32`.
+pub const MAX_DIMENSION: usize = 4096;
+
+/// A pixel layout, as camera sensors and their DMA engines deliver it.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+pub enum PixelFormat {
+    /// 16-bit RGB 5:6:5, little-endian: red in bits 15..11, green 10..5, blue 4..0.
+    Rgb565,
+    /// 24-bit RGB, bytes in the order R, G, B.
+    Rgb888,
+    /// YUV 4:2:2 packed as Y0 U Y1 V (YUYV): two pixels share one U and V.
+    /// The width must be even.
+    Yuv422,
+    /// 8-bit luminance.
+    Gray8,
+}
+
+impl PixelFormat {
+    /// Bytes per pixel (YUV 4:2:2 averages 2 per pixel: 4 bytes per pair).
+    pub const fn bytes_per_pixel(self) -> usize {
+        match self {
+            PixelFormat::Rgb565 | PixelFormat::Yuv422 => 2,
+            PixelFormat::Rgb888 => 3,
+            PixelFormat::Gray8 => 1,
+        }
+    }
+
+    /// The format's code in the fixture file format (stable; see the README).
+    pub const fn code(self) -> u16 {
+        match self {
+            PixelFormat::Rgb565 => 1,
+            PixelFormat::Rgb888 => 2,
+            PixelFormat::Yuv422 => 3,
+            PixelFormat::Gray8 => 4,
+        }
+    }
+
+    /// The format with the given fixture code, if there is one.
+    pub const fn from_code(code: u16) -> Option<Self> {
+        match code {
+            1 => Some(PixelFormat::Rgb565),
+            2 => Some(PixelFormat::Rgb888),
+            3 => Some(PixelFormat::Yuv422),
+            4 => Some(PixelFormat::Gray8),
+            _ => None,
+        }
+    }
+}
+
+/// A validated, borrowed view of one frame.
+///
+/// ```
+/// use pftrack::{Frame, PixelFormat};
+///
+/// // A 4x2 GRAY8 image whose rows are padded to 8 bytes.
+/// let buf = [0u8; 8 + 4];
+/// let frame = Frame::new(&buf, 4, 2, 8, PixelFormat::Gray8)?;
+/// assert_eq!((frame.width(), frame.height()), (4, 2));
+///
+/// // One byte short of the last row: a typed error, not a panic.
+/// assert!(Frame::new(&buf[..11], 4, 2, 8, PixelFormat::Gray8).is_err());
+/// # Ok::<(), pftrack::FrameError>(())
+/// ```
+#[derive(Copy, Clone, Debug)]
+pub struct Frame<'a> {
+    data: &'a [u8],
+    width: usize,
+    height: usize,
+    stride: usize,
+    format: PixelFormat,
+}
+
+impl<'a> Frame<'a> {
+    /// Checks the dimensions against the buffer and returns a view.
+    ///
+    /// `stride` is the distance in bytes between the starts of two rows; it
+    /// must be at least `width * bytes_per_pixel`. The buffer must hold
+    /// `stride * (height - 1) + width * bytes_per_pixel` bytes (the last row
+    /// needs no padding); longer buffers are accepted.
+    pub fn new(
+        data: &'a [u8],
+        width: usize,
+        height: usize,
+        stride: usize,
+        format: PixelFormat,
+    ) -> Result<Self, FrameError> {
+        if width == 0 || height == 0 {
+            return Err(FrameError::ZeroSize);
+        }
+        if width > MAX_DIMENSION || height > MAX_DIMENSION {
+            return Err(FrameError::TooLarge { width, height });
+        }
+        if format == PixelFormat::Yuv422 && width % 2 != 0 {
+            return Err(FrameError::OddYuvWidth { width });
+        }
+        let row_bytes = width * format.bytes_per_pixel();
+        if stride < row_bytes {
+            return Err(FrameError::StrideTooSmall { stride, row_bytes });
+        }
+        let needed = stride
+            .checked_mul(height - 1)
+            .and_then(|b| b.checked_add(row_bytes))
+            .ok_or(FrameError::BufferTooSmall { needed: usize::MAX, got: data.len() })?;
+        if data.len() < needed {
+            return Err(FrameError::BufferTooSmall { needed, got: data.len() });
+        }
+        Ok(Frame { data, width, height, stride, format })
+    }
+
+    /// A tightly packed frame: the stride is `width * bytes_per_pixel`.
+    pub fn packed(data: &'a [u8], width: usize, height: usize, format: PixelFormat) -> Result<Self, FrameError> {
+        Self::new(data, width, height, width.saturating_mul(format.bytes_per_pixel()), format)
+    }
+
+    /// Width in pixels.
+    pub fn width(&self) -> usize {
+        self.width
+    }
+
+    /// Height in pixels.
+    pub fn height(&self) -> usize {
+        self.height
+    }
+
+    /// Row stride in bytes.
+    pub fn stride(&self) -> usize {
+        self.stride
+    }
+
+    /// The pixel format.
+    pub fn format(&self) -> PixelFormat {
+        self.format
+    }
+
+    /// The pixel bytes of row `y` (exactly `width * bytes_per_pixel` bytes),
+    /// or `None` past the last row.
+    pub fn row(&self, y: usize) -> Option<&'a [u8]> {
+        let start = y.checked_mul(self.stride)?;
+        let len = self.width * self.format.bytes_per_pixel();
+        self.data.get(start..start.checked_add(len)?)
+    }
+
+    /// The colour of pixel `(x, y)` as 8-bit RGB, or `None` outside the frame.
+    ///
+    /// This is the slow, general accessor for tools and tests; the histogram
+    /// loops use the same conversion through [`PixelRead`] on whole rows.
+    pub fn rgb(&self, x: usize, y: usize) -> Option<[u8; 3]> {
+        let row = self.row(y)?;
+        if x >= self.width {
+            return None;
+        }
+        match self.format {
+            PixelFormat::Rgb565 => Rgb565::rgb(row, x),
+            PixelFormat::Rgb888 => Rgb888::rgb(row, x),
+            PixelFormat::Yuv422 => Yuv422::rgb(row, x),
+            PixelFormat::Gray8 => Gray8::rgb(row, x),
+        }
+    }
+}
+
+/// Reads one pixel of a row in a given format. Implemented by zero-sized
+/// format markers so that the histogram loop is compiled once per format,
+/// with no per-pixel format dispatch.
+pub(crate) trait PixelRead {
+    /// 8-bit RGB of pixel `x` of `row`, or `None` if `x` is past the row.
+    fn rgb(row: &[u8], x: usize) -> Option<[u8; 3]>;
+}
+
+/// Marker for [`PixelFormat::Rgb565`].
+pub(crate) struct Rgb565;
+/// Marker for [`PixelFormat::Rgb888`].
+pub(crate) struct Rgb888;
+/// Marker for [`PixelFormat::Yuv422`].
+pub(crate) struct Yuv422;
+/// Marker for [`PixelFormat::Gray8`].
+pub(crate) struct Gray8;
+
+impl PixelRead for Rgb565 {
+    #[inline(always)]
+    fn rgb(row: &[u8], x: usize) -> Option<[u8; 3]> {
+        let lo = *row.get(2 * x)? as u16;
+        let hi = *row.get(2 * x + 1)? as u16;
+        let v = lo | (hi << 8);
+        // Replicate the top bits into the low ones so that 0x1f maps to 255.
+        let r = ((v >> 11) & 0x1f) as u8;
+        let g = ((v >> 5) & 0x3f) as u8;
+        let b = (v & 0x1f) as u8;
+        Some([(r << 3) | (r >> 2), (g << 2) | (g >> 4), (b << 3) | (b >> 2)])
+    }
+}
+
+impl PixelRead for Rgb888 {
+    #[inline(always)]
+    fn rgb(row: &[u8], x: usize) -> Option<[u8; 3]> {
+        let p = row.get(3 * x..3 * x + 3)?;
+        Some([*p.first()?, *p.get(1)?, *p.get(2)?])
+    }
+}
+
+impl PixelRead for Yuv422 {
+    #[inline(always)]
+    fn rgb(row: &[u8], x: usize) -> Option<[u8; 3]> {
+        let pair = 4 * (x / 2);
+        let y = *row.get(2 * x)? as i32;
+        let u = *row.get(pair + 1)? as i32 - 128;
+        let v = *row.get(pair + 3)? as i32 - 128;
+        Some(yuv_to_rgb(y, u, v))
+    }
+}
+
+impl PixelRead for Gray8 {
+    #[inline(always)]
+    fn rgb(row: &[u8], x: usize) -> Option<[u8; 3]> {
+        let g = *row.get(x)?;
+        Some([g, g, g])
+    }
+}
+
+/// Full-range BT.601 YUV to RGB in 8-bit fixed point (coefficients × 256).
+#[inline(always)]
+fn yuv_to_rgb(y: i32, u: i32, v: i32) -> [u8; 3] {
+    let r = y + ((359 * v) >> 8);
+    let g = y - ((88 * u + 183 * v) >> 8);
+    let b = y + ((454 * u) >> 8);
+    [r.clamp(0, 255) as u8, g.clamp(0, 255) as u8, b.clamp(0, 255) as u8]
+}
+
+/// Full-range BT.601 RGB to YUV, the inverse of the conversion used to read
+/// [`PixelFormat::Yuv422`] frames (for tools that write such frames).
+pub fn rgb_to_yuv(rgb: [u8; 3]) -> [u8; 3] {
+    let [r, g, b] = [rgb[0] as i32, rgb[1] as i32, rgb[2] as i32];
+    let y = (77 * r + 150 * g + 29 * b + 128) >> 8;
+    let u = ((-43 * r - 85 * g + 128 * b + 128) >> 8) + 128;
+    let v = ((128 * r - 107 * g - 21 * b + 128) >> 8) + 128;
+    [y.clamp(0, 255) as u8, u.clamp(0, 255) as u8, v.clamp(0, 255) as u8]
+}
+
+/// Packs 8-bit RGB into little-endian RGB565 bytes (for tools that write frames).
+pub fn rgb_to_rgb565(rgb: [u8; 3]) -> [u8; 2] {
+    let v = ((rgb[0] as u16 >> 3) << 11) | ((rgb[1] as u16 >> 2) << 5) | (rgb[2] as u16 >> 3);
+    v.to_le_bytes()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rejects_inconsistent_dimensions() {
+        let buf = [0u8; 100];
+        assert_eq!(Frame::new(&buf, 0, 2, 8, PixelFormat::Gray8).err(), Some(FrameError::ZeroSize));
+        assert_eq!(
+            Frame::new(&buf, 5, 2, 8, PixelFormat::Rgb565).err(),
+            Some(FrameError::StrideTooSmall { stride: 8, row_bytes: 10 })
+        );
+        assert_eq!(
+            Frame::new(&buf, 10, 10, 10, PixelFormat::Gray8).err(),
+            None,
+            "exactly 100 bytes is enough for 10x10 GRAY8"
+        );
+        assert_eq!(
+            Frame::new(&buf, 10, 11, 10, PixelFormat::Gray8).err(),
+            Some(FrameError::BufferTooSmall { needed: 110, got: 100 })
+        );
+        assert_eq!(Frame::new(&buf, 3, 1, 8, PixelFormat::Yuv422).err(), Some(FrameError::OddYuvWidth { width: 3 }));
+        assert!(matches!(Frame::new(&buf, 5000, 1, 5000, PixelFormat::Gray8), Err(FrameError::TooLarge { .. })));
+        // A stride so large that stride * (height - 1) overflows.
+        assert!(matches!(
+            Frame::new(&buf, 1, 3, usize::MAX / 2 + 1, PixelFormat::Gray8),
+            Err(FrameError::BufferTooSmall { .. })
+        ));
+    }
+
+    #[test]
+    fn reads_every_format_with_stride() {
+        // Reason: each format encodes the same colour (200, 100, 50) by hand;
+        // decoding must return it (within each format's quantisation).
+        let c565 = rgb_to_rgb565([200, 100, 50]);
+        // 2 pixels per row, stride 6 (2 bytes of padding), 2 rows.
+        let mut buf = [0xAAu8; 12];
+        buf[6 + 2] = c565[0];
+        buf[6 + 3] = c565[1];
+        let f = Frame::new(&buf, 2, 2, 6, PixelFormat::Rgb565).unwrap_or_else(|e| panic!("{e:?}"));
+        let got = f.rgb(1, 1).unwrap_or_default();
+        // RGB565 keeps 5/6/5 bits: errors up to 7/3/7.
+        assert!((got[0] as i32 - 200).abs() <= 7 && (got[1] as i32 - 100).abs() <= 3 && (got[2] as i32 - 50).abs() <= 7);
+        assert_eq!(f.rgb(2, 1), None);
+        assert_eq!(f.rgb(0, 2), None);
+
+        let buf888 = [1u8, 2, 3, 200, 100, 50];
+        let f = Frame::packed(&buf888, 2, 1, PixelFormat::Rgb888).unwrap_or_else(|e| panic!("{e:?}"));
+        assert_eq!(f.rgb(1, 0), Some([200, 100, 50]));
+
+        let [y, u, v] = rgb_to_yuv([200, 100, 50]);
+        let yuyv = [y, u, y, v];
+        let f = Frame::packed(&yuyv, 2, 1, PixelFormat::Yuv422).unwrap_or_else(|e| panic!("{e:?}"));
+        for x in 0..2 {
+            let got = f.rgb(x, 0).unwrap_or_default();
+            for (g, w) in got.iter().zip([200u8, 100, 50]) {
+                assert!((*g as i32 - w as i32).abs() <= 3, "{got:?}");
+            }
+        }
+
+        let f = Frame::packed(&[9u8, 77], 2, 1, PixelFormat::Gray8).unwrap_or_else(|e| panic!("{e:?}"));
+        assert_eq!(f.rgb(1, 0), Some([77, 77, 77]));
+    }
+
+    #[test]
+    fn rgb565_extremes_map_to_full_range() {
+        let white = rgb_to_rgb565([255, 255, 255]);
+        assert_eq!(Rgb565::rgb(&white, 0), Some([255, 255, 255]));
+        assert_eq!(Rgb565::rgb(&[0, 0], 0), Some([0, 0, 0]));
+    }
+}

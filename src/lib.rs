@@ -1,0 +1,62 @@
+//! A `no_std`, allocation-free colour particle-filter object tracker for
+//! small ARM devices.
+//!
+//! The method is the adaptive colour particle filter of Nummiaro, Koller-Meier
+//! and Van Gool: the target is an upright ellipse whose kernel-weighted colour
+//! histogram is compared with a model by the Bhattacharyya coefficient; a set
+//! of `N` hypotheses moves with constant-velocity dynamics, is weighted by
+//! `exp(−d²/2σ²)` and resampled; the model adapts on confident frames; and an
+//! appearance test against the background drives explicit searching /
+//! tracking / lost states.
+//!
+//! # Shape
+//! - [`Frame`]: a checked view of a raw camera buffer (RGB565, RGB888,
+//!   YUV 4:2:2, GRAY8, with stride).
+//! - [`Histogram`], [`Model`]: integer kernel-weighted histograms and the
+//!   target model with its Bhattacharyya coefficient.
+//! - [`Tracker`]: the filter and its life cycle, configured by [`Config`].
+//!
+//! # Numbers
+//! One convention, in [`scalar`]: integers per pixel, `f32` per particle,
+//! using only operations that are bit-identical on x86_64 and ARM, so a seeded
+//! run gives the same track on the host and on a microcontroller.
+//!
+//! # Panics
+//! None on any input. Constructors validate and return [`Error`]; the
+//! per-pixel and per-particle paths use checked slice access and saturating or
+//! wrapping arithmetic where a bound is not evident. The only `assert!`s are
+//! compile-time checks on the const generic capacities.
+//!
+//! # Example
+//! ```
+//! use pftrack::{BoundingBox, Config, Frame, PixelFormat, Tracker};
+//!
+//! let pixels = [0u8; 32 * 24 * 2]; // a black RGB565 QQQVGA frame
+//! let frame = Frame::new(&pixels, 32, 24, 64, PixelFormat::Rgb565)?;
+//! let mut tracker: Tracker<20> = Tracker::new(Config::default(), 7)?;
+//! tracker.init(&frame, BoundingBox::new(8.0, 6.0, 10.0, 8.0))?;
+//! let estimate = tracker.step(&frame)?;
+//! assert!(estimate.confidence > 0.99); // black matches black
+//! # Ok::<(), pftrack::Error>(())
+//! ```
+#![cfg_attr(not(test), no_std)]
+
+pub mod config;
+pub mod error;
+pub mod filter;
+pub mod frame;
+pub mod geometry;
+pub mod histogram;
+pub mod likelihood;
+pub mod scalar;
+pub mod tracker;
+
+pub use config::Config;
+pub use error::{ConfigError, Error, FrameError, ParamProblem, RegionError};
+pub use filter::{Dynamics, Particle, Resampling};
+pub use frame::{Frame, PixelFormat};
+pub use geometry::{BoundingBox, Ellipse};
+pub use histogram::{Binning, Histogram, Model, Sampling};
+pub use likelihood::{Likelihood, Sigma};
+pub use scalar::Real;
+pub use tracker::{Estimate, Event, TrackState, Tracker};

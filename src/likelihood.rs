@@ -1,0 +1,84 @@
+//! From a Bhattacharyya coefficient to a particle weight.
+//!
+//! `L = exp(−d² / (2σ²)) + ε`, with `d² = 1 − ρ`. The floor `ε` keeps
+//! particles that see nothing like the target alive, so a filter that has lost
+//! its target can still find it again (third paper). `σ` is either fixed or
+//! chosen each frame so that the best particle gets `log L = −1`.
+
+use crate::scalar::{Real, exp};
+
+/// How the likelihood's width is chosen.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub enum Sigma {
+    /// The same `σ` every frame (the first paper uses 0.2).
+    Fixed(Real),
+    /// Each frame, `σ = sqrt(d_min² / 2)` for the best particle's distance
+    /// `d_min`, so that particle gets `log L = −1`; bounded to `[min, max]` so
+    /// that a perfect match does not make every other particle weightless and
+    /// a terrible frame does not make the weights flat.
+    Adaptive {
+        /// Lower bound on σ.
+        min: Real,
+        /// Upper bound on σ.
+        max: Real,
+    },
+}
+
+/// The likelihood model of one cue.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Likelihood {
+    /// How σ is chosen.
+    pub sigma: Sigma,
+    /// The floor ε added to every weight.
+    pub eps: Real,
+}
+
+impl Likelihood {
+    /// The σ to use this frame, given the smallest squared distance of any particle.
+    pub fn sigma_for(&self, d2_min: Real) -> Real {
+        match self.sigma {
+            Sigma::Fixed(s) => s,
+            Sigma::Adaptive { min, max } => crate::scalar::sqrt(0.5 * d2_min.max(0.0)).clamp(min, max),
+        }
+    }
+
+    /// `exp(−d² / (2σ²)) + ε` for a squared distance `d2 = 1 − ρ`.
+    pub fn weight(&self, d2: Real, sigma: Real) -> Real {
+        gaussian(d2, sigma) + self.eps
+    }
+}
+
+/// `exp(−d² / (2σ²))`, the likelihood without its floor.
+pub fn gaussian(d2: Real, sigma: Real) -> Real {
+    exp(-d2.max(0.0) / (2.0 * sigma * sigma))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn adaptive_sigma_gives_best_particle_log_l_minus_one() {
+        // Reason: σ² = d_min²/2 makes d_min²/(2σ²) exactly 1 (paper 3, eq. 24).
+        let l = Likelihood { sigma: Sigma::Adaptive { min: 0.01, max: 1.0 }, eps: 0.0 };
+        for d2 in [0.01f32, 0.05, 0.2, 0.6] {
+            let s = l.sigma_for(d2);
+            let w = l.weight(d2, s);
+            assert!((w.ln() + 1.0).abs() < 1e-3, "d2={d2}: log L = {}", w.ln());
+        }
+        // Bounds hold at both ends.
+        assert_eq!(l.sigma_for(0.0), 0.01);
+        assert_eq!(l.sigma_for(4.0), 1.0);
+    }
+
+    #[test]
+    fn fixed_sigma_and_floor() {
+        // Reason: hand values: d² = 0.08, σ = 0.2 gives exp(−1) = 0.3679.
+        let l = Likelihood { sigma: Sigma::Fixed(0.2), eps: 0.01 };
+        assert_eq!(l.sigma_for(0.5), 0.2);
+        assert!((l.weight(0.08, 0.2) - (0.36788 + 0.01)).abs() < 1e-4);
+        // A hopeless particle still has the floor.
+        assert!((l.weight(1.0, 0.2) - 0.01).abs() < 1e-5);
+        assert_eq!(gaussian(0.0, 0.2), 1.0);
+    }
+}

@@ -1,0 +1,386 @@
+//! The tracker: a particle filter over colour histograms with an adaptive
+//! model and explicit searching / tracking / lost states.
+
+use crate::config::Config;
+use crate::error::{ConfigError, Error, ParamProblem, RegionError};
+use crate::filter::{Bounds, Particle, mean_state, resample};
+use crate::frame::Frame;
+use crate::geometry::{BoundingBox, Ellipse};
+use crate::histogram::{Histogram, Model};
+use crate::likelihood::gaussian;
+use crate::scalar::{Real, sqrt, unit_from_bits};
+use rand_core::{Rng, SeedableRng};
+use rand_xoshiro::Xoshiro128PlusPlus;
+
+/// What the tracker believes about its target.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+pub enum TrackState {
+    /// Looking for a target it has a model of but has not found yet.
+    Searching,
+    /// Following the target.
+    Tracking,
+    /// Had the target and lost it; searching for it again.
+    Lost,
+}
+
+/// A state change that happened in this step.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+pub enum Event {
+    /// The tracker was (re-)initialised from a box.
+    Initialised,
+    /// A searched-for target appeared for the first time.
+    Acquired,
+    /// The target was declared lost.
+    LostTarget,
+    /// A lost target was found again.
+    Reacquired,
+}
+
+/// The result of one step.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub struct Estimate {
+    /// The mean state's ellipse.
+    pub ellipse: Ellipse,
+    /// The Bhattacharyya coefficient `ρ` between the target model and the
+    /// histogram at the mean state, in `[0, 1]`: 1 is a perfect match.
+    pub confidence: Real,
+    /// The state after this step.
+    pub state: TrackState,
+    /// The transition that happened in this step, if any.
+    pub event: Option<Event>,
+    /// How many particles satisfied the appearance condition `ρ > μ + kσ`.
+    pub appearing: u16,
+    /// Whether the target model was updated in this step.
+    pub model_updated: bool,
+    /// The likelihood width σ used in this step.
+    pub sigma: Real,
+}
+
+impl Estimate {
+    /// The estimate as a box (the ellipse's bounding box).
+    pub fn bbox(&self) -> BoundingBox {
+        self.ellipse.to_box()
+    }
+}
+
+/// What the tracker learnt when it was initialised.
+#[derive(Clone, Debug)]
+struct Target<const K: usize> {
+    model: Model<K>,
+    /// Frame size the tracker was initialised on.
+    frame: (usize, usize),
+    /// `μ + kσ` of the background's ρ: the appearance threshold.
+    threshold: Real,
+    /// Half axes to give particles re-drawn while searching.
+    half_axes: (Real, Real),
+}
+
+/// A colour particle-filter tracker with `N` particles and histograms of up
+/// to `K` bins, drawing randomness from `R`.
+///
+/// Everything is stored inline: a `Tracker<100>` is about 10 KiB and never
+/// allocates. Place it in a `static` (e.g. with `static_cell`) on small stacks.
+///
+/// ```
+/// use pftrack::{BoundingBox, Config, Frame, PixelFormat, TrackState, Tracker};
+///
+/// // A 64x48 grey scene with a red 12x12 square that moves right 2 px a frame.
+/// let scene = |left: usize| {
+///     let mut px = vec![90u8; 64 * 48 * 3];
+///     for y in 18..30 {
+///         for x in left..left + 12 {
+///             px[(y * 64 + x) * 3..][..3].copy_from_slice(&[220, 30, 30]);
+///         }
+///     }
+///     px
+/// };
+/// let mut tracker: Tracker<50> = Tracker::new(Config::default(), 42)?;
+/// let first = scene(10);
+/// tracker.init(&Frame::packed(&first, 64, 48, PixelFormat::Rgb888)?, BoundingBox::new(10.0, 18.0, 12.0, 12.0))?;
+/// for t in 1..=10 {
+///     let px = scene(10 + 2 * t);
+///     let est = tracker.step(&Frame::packed(&px, 64, 48, PixelFormat::Rgb888)?)?;
+///     assert_eq!(est.state, TrackState::Tracking);
+///     let (cx, _) = est.bbox().centre();
+///     assert!((cx - (16.0 + 2.0 * t as f32)).abs() < 3.0);
+/// }
+/// # Ok::<(), pftrack::Error>(())
+/// ```
+#[derive(Clone, Debug)]
+pub struct Tracker<const N: usize, const K: usize = 512, R = Xoshiro128PlusPlus> {
+    config: Config,
+    rng: R,
+    particles: [Particle; N],
+    scratch: [Particle; N],
+    /// Normalised weights of `particles` after a step.
+    weights: [Real; N],
+    histogram: Histogram<K>,
+    target: Option<Target<K>>,
+    state: TrackState,
+    misses: u16,
+}
+
+impl<const N: usize, const K: usize> Tracker<N, K, Xoshiro128PlusPlus> {
+    /// A tracker with the default generator, xoshiro128++ seeded from `seed`:
+    /// the same seed and frames give the same estimates, bit for bit, on every target.
+    pub fn new(config: Config, seed: u64) -> Result<Self, Error> {
+        Self::with_rng(config, Xoshiro128PlusPlus::seed_from_u64(seed))
+    }
+}
+
+impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
+    /// A tracker drawing its randomness from `rng`.
+    pub fn with_rng(config: Config, rng: R) -> Result<Self, Error> {
+        const {
+            assert!(N >= 2, "a particle filter needs at least 2 particles");
+            assert!(N <= u16::MAX as usize, "at most 65535 particles");
+        }
+        config.validate()?;
+        if config.binning.bins() > K {
+            return Err(ConfigError { field: "binning", problem: ParamProblem::OutOfRange }.into());
+        }
+        Ok(Tracker {
+            config,
+            rng,
+            particles: [Particle::default(); N],
+            scratch: [Particle::default(); N],
+            weights: [1.0 / N as Real; N],
+            histogram: Histogram::new(),
+            target: None,
+            state: TrackState::Searching,
+            misses: 0,
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// The current state.
+    pub fn state(&self) -> TrackState {
+        self.state
+    }
+
+    /// The particles after the last step (for drawing and diagnostics).
+    pub fn particles(&self) -> &[Particle; N] {
+        &self.particles
+    }
+
+    /// The particles' normalised weights after the last step.
+    pub fn weights(&self) -> &[Real; N] {
+        &self.weights
+    }
+
+    /// The target model, once initialised.
+    pub fn model(&self) -> Option<&Model<K>> {
+        self.target.as_ref().map(|t| &t.model)
+    }
+
+    /// The appearance threshold `μ + kσ` learnt from the background, once initialised.
+    pub fn appearance_threshold(&self) -> Option<Real> {
+        self.target.as_ref().map(|t| t.threshold)
+    }
+
+    /// Learns the target from `bbox` in `frame` and starts tracking it there.
+    ///
+    /// Calling it again at any time re-initialises the tracker on a new box
+    /// (and may change resolution). The background statistics for the
+    /// appearance test are measured on the same frame, away from the box.
+    pub fn init(&mut self, frame: &Frame<'_>, bbox: BoundingBox) -> Result<Estimate, Error> {
+        let target = self.learn(frame, &bbox)?;
+        let e = Ellipse::from_box(&bbox);
+        self.particles = [Particle::at(&e); N];
+        self.weights = [1.0 / N as Real; N];
+        self.target = Some(target);
+        self.state = TrackState::Tracking;
+        self.misses = 0;
+        Ok(Estimate {
+            ellipse: e,
+            confidence: 1.0,
+            state: TrackState::Tracking,
+            event: Some(Event::Initialised),
+            appearing: N as u16,
+            model_updated: false,
+            sigma: self.config.likelihood.sigma_for(0.0),
+        })
+    }
+
+    /// Learns the target from `bbox` in a reference `frame`, then searches
+    /// for it in the frames that follow (automatic initialisation, first paper):
+    /// particles are spread over the frame, and tracking starts once more
+    /// than `b · N` of them see the target.
+    pub fn search(&mut self, frame: &Frame<'_>, bbox: BoundingBox) -> Result<(), Error> {
+        let target = self.learn(frame, &bbox)?;
+        let (w, h) = target.frame;
+        let (hx, hy) = target.half_axes;
+        for p in self.particles.iter_mut() {
+            *p = uniform_particle(&mut self.rng, w, h, hx, hy);
+        }
+        self.weights = [1.0 / N as Real; N];
+        self.target = Some(target);
+        self.state = TrackState::Searching;
+        self.misses = 0;
+        Ok(())
+    }
+
+    /// The model of `bbox` and the background statistics of `frame`.
+    fn learn(&mut self, frame: &Frame<'_>, bbox: &BoundingBox) -> Result<Target<K>, Error> {
+        bbox.validate(frame.width(), frame.height())?;
+        let e = Ellipse::from_box(bbox);
+        let (binning, sampling) = (self.config.binning, self.config.sampling);
+        self.histogram.compute(frame, &e, binning, sampling);
+        let model = Model::from_histogram(&self.histogram).ok_or(RegionError::NoPixels)?;
+
+        // Background ρ on a grid of target-sized regions that do not touch the
+        // target: at most 8x8 of them, spaced at least one target size apart.
+        let (fw, fh) = (frame.width() as Real, frame.height() as Real);
+        let step_x = bbox.width.max(fw / 8.0);
+        let step_y = bbox.height.max(fh / 8.0);
+        let (mut n, mut s1, mut s2) = (0u32, 0.0 as Real, 0.0 as Real);
+        let mut y = 0.0;
+        while y + bbox.height <= fh {
+            let mut x = 0.0;
+            while x + bbox.width <= fw {
+                let cand = BoundingBox::new(x, y, bbox.width, bbox.height);
+                if cand.iou(bbox) == 0.0 {
+                    self.histogram.compute(frame, &Ellipse::from_box(&cand), binning, sampling);
+                    let rho = model.bhattacharyya(&self.histogram);
+                    n += 1;
+                    s1 += rho;
+                    s2 += rho * rho;
+                }
+                x += step_x;
+            }
+            y += step_y;
+        }
+        // With no room for background samples (a target filling the frame)
+        // the threshold is 0: any overlap counts as seeing the target.
+        let threshold = if n >= 2 {
+            let mean = s1 / n as Real;
+            let var = (s2 / n as Real - mean * mean).max(0.0);
+            (mean + self.config.appearance_sigmas * sqrt(var)).min(1.0)
+        } else {
+            0.0
+        };
+        Ok(Target {
+            model,
+            frame: (frame.width(), frame.height()),
+            threshold,
+            half_axes: (e.hx.max(self.config.min_half_axis), e.hy.max(self.config.min_half_axis)),
+        })
+    }
+
+    /// Tracks one frame: resample, propagate, observe, estimate, then update
+    /// the state machine and, when the estimate is trustworthy, the model.
+    ///
+    /// The frame must have the size the tracker was initialised with; any
+    /// pixel format may be used.
+    pub fn step(&mut self, frame: &Frame<'_>) -> Result<Estimate, Error> {
+        let Some(target) = self.target.as_mut() else {
+            return Err(Error::NotInitialised);
+        };
+        let size = (frame.width(), frame.height());
+        if size != target.frame {
+            return Err(Error::FrameSizeChanged { expected: target.frame, got: size });
+        }
+        let cfg = &self.config;
+        let bounds = Bounds { width: size.0 as Real, height: size.1 as Real, min_half: cfg.min_half_axis };
+
+        // 1. Resample in proportion to the last step's weights, 2. propagate.
+        resample(&self.particles, &mut self.weights, &mut self.scratch, cfg.resampling, &mut self.rng);
+        self.particles = self.scratch;
+        for p in self.particles.iter_mut() {
+            cfg.dynamics.propagate(p, &bounds, &mut self.rng);
+        }
+        if self.state != TrackState::Tracking {
+            // Keep exploring: re-draw a fraction of the particles anywhere.
+            let reseed = (cfg.reseed_fraction * N as Real) as usize;
+            let (hx, hy) = target.half_axes;
+            // Spread over the set: systematic resampling leaves it ordered by
+            // parent, and the first few would all be descendants of one.
+            let stride = if reseed > 0 { N / reseed } else { N };
+            for p in self.particles.iter_mut().step_by(stride.max(1)).take(reseed) {
+                *p = uniform_particle(&mut self.rng, size.0, size.1, hx, hy);
+            }
+        }
+
+        // 3. Observe: ρ per particle, kept in `weights` until σ is known.
+        let mut appearing = 0u16;
+        let mut rho_max: Real = 0.0;
+        for (p, w) in self.particles.iter().zip(self.weights.iter_mut()) {
+            self.histogram.compute(frame, &p.ellipse(), cfg.binning, cfg.sampling);
+            let rho = target.model.bhattacharyya(&self.histogram);
+            if rho > target.threshold {
+                appearing += 1;
+            }
+            rho_max = rho_max.max(rho);
+            *w = rho;
+        }
+        let sigma = cfg.likelihood.sigma_for(1.0 - rho_max);
+        let mut sum = 0.0;
+        for w in self.weights.iter_mut() {
+            *w = cfg.likelihood.weight(1.0 - *w, sigma);
+            sum += *w;
+        }
+        if sum > 0.0 && sum.is_finite() {
+            for w in self.weights.iter_mut() {
+                *w /= sum;
+            }
+        } else {
+            self.weights = [1.0 / N as Real; N];
+        }
+
+        // 4. Estimate the mean state and look at it.
+        let mean = mean_state(&self.particles, &self.weights);
+        let ellipse = mean.ellipse();
+        self.histogram.compute(frame, &ellipse, cfg.binning, cfg.sampling);
+        let confidence = target.model.bhattacharyya(&self.histogram);
+
+        // 5. The appearance test drives the state machine.
+        let seen = appearing as Real > cfg.kickoff * N as Real;
+        let mut event = None;
+        match self.state {
+            TrackState::Tracking => {
+                if seen {
+                    self.misses = 0;
+                } else {
+                    self.misses = self.misses.saturating_add(1);
+                    if self.misses >= cfg.lost_after {
+                        self.state = TrackState::Lost;
+                        event = Some(Event::LostTarget);
+                    }
+                }
+            }
+            TrackState::Searching | TrackState::Lost if seen => {
+                event = Some(if self.state == TrackState::Searching { Event::Acquired } else { Event::Reacquired });
+                self.state = TrackState::Tracking;
+                self.misses = 0;
+            }
+            TrackState::Searching | TrackState::Lost => {}
+        }
+
+        // 6. Adapt the model, only on confident tracking frames.
+        let pi_e = gaussian(1.0 - confidence, sigma);
+        let model_updated = self.state == TrackState::Tracking
+            && event.is_none()
+            && self.misses == 0
+            && pi_e > cfg.update_threshold
+            && cfg.alpha > 0.0;
+        if model_updated {
+            target.model.blend(&self.histogram, cfg.alpha);
+        }
+        if self.state == TrackState::Tracking {
+            target.half_axes = (ellipse.hx, ellipse.hy);
+        }
+
+        Ok(Estimate { ellipse, confidence, state: self.state, event, appearing, model_updated, sigma })
+    }
+}
+
+/// A particle at rest anywhere in a `width × height` frame.
+fn uniform_particle<R: Rng>(rng: &mut R, width: usize, height: usize, hx: Real, hy: Real) -> Particle {
+    let x = unit_from_bits(rng.next_u32()) * width as Real;
+    let y = unit_from_bits(rng.next_u32()) * height as Real;
+    Particle { x, y, hx, hy, ..Default::default() }
+}
