@@ -40,6 +40,12 @@ pub struct Config {
     /// A particle "appears" (sees the target) when its `ρ` exceeds the
     /// background mean by this many background standard deviations (the paper's 2).
     pub appearance_sigmas: Real,
+    /// A floor under the appearance threshold, in `[0, 1]`. The background
+    /// statistics come from a sparse grid, but particles *search* for the
+    /// best-matching background patch, which can beat `μ + kσ` by far when
+    /// the background is uniformly unlike the target; the floor keeps such
+    /// a patch from counting as the target.
+    pub min_appearance: Real,
     /// The kick-off fraction `b` in `(0, 1]`: tracking starts when more than
     /// `b · N` particles appear, and a frame with at most `b · N` counts as a miss.
     pub kickoff: Real,
@@ -72,6 +78,7 @@ impl Default for Config {
             alpha: 0.1,
             update_threshold: 0.15,
             appearance_sigmas: 2.0,
+            min_appearance: 0.5,
             kickoff: 0.1,
             lost_after: 3,
             reseed_fraction: 0.25,
@@ -117,6 +124,7 @@ impl Config {
         check("alpha", self.alpha, 0.0, 1.0)?;
         check("update_threshold", self.update_threshold, 0.0, 1.0)?;
         check("appearance_sigmas", self.appearance_sigmas, 0.0, 100.0)?;
+        check("min_appearance", self.min_appearance, 0.0, 1.0)?;
         positive("kickoff", self.kickoff, 1.0)?;
         if self.lost_after == 0 || self.lost_after > 1000 {
             return Err(ConfigError { field: "lost_after", problem: ParamProblem::OutOfRange });

@@ -255,13 +255,13 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
             y += step_y;
         }
         // With no room for background samples (a target filling the frame)
-        // the threshold is 0: any overlap counts as seeing the target.
+        // only the floor applies.
         let threshold = if n >= 2 {
             let mean = s1 / n as Real;
             let var = (s2 / n as Real - mean * mean).max(0.0);
-            (mean + self.config.appearance_sigmas * sqrt(var)).min(1.0)
+            (mean + self.config.appearance_sigmas * sqrt(var)).max(self.config.min_appearance).min(1.0)
         } else {
-            0.0
+            self.config.min_appearance
         };
         Ok(Target {
             model,

@@ -1,0 +1,236 @@
+//! Runs the tracker on OTB sequences or on the project's fixtures, writes the
+//! track of each, and prints success AUC, precision@20 and ms/frame.
+
+use clap::{Parser, Subcommand};
+use host_tests::fixture::Fixture;
+use host_tests::metrics::{has_target, median, score};
+use host_tests::otb;
+use host_tests::runner::{PARTICLES, Run, track};
+use indicatif::{ProgressBar, ProgressStyle};
+use pftrack::{BoundingBox, Config, Event, Frame, PixelFormat};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(about = "Track sequences with pftrack and score them against ground truth")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(clap::Args, Clone)]
+struct Common {
+    #[arg(skip)]
+    config: Config,
+    /// Where to write `<sequence>.txt` tracks (one x,y,w,h line per frame).
+    #[arg(long, default_value = "out")]
+    out_dir: PathBuf,
+    /// Seed of the tracker's random generator.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Also print every frame's estimate: state, event, confidence, appearing particles, box and truth.
+    #[arg(long)]
+    frames: bool,
+    /// Override a configuration field, e.g. `--set sampling=checkerboard --set eps=0.01`
+    /// (repeatable; an unknown key lists the known ones).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// OTB sequence folders (img/ + groundtruth.txt); fixture files (.pft) are accepted too.
+    Otb {
+        /// Sequence folders or .pft fixture files.
+        #[arg(required = true)]
+        seqs: Vec<PathBuf>,
+        #[command(flatten)]
+        common: Common,
+    },
+    /// The project's fixture files (.pft).
+    Fixture {
+        /// Fixture files.
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        #[command(flatten)]
+        common: Common,
+    },
+}
+
+/// A loaded sequence, in whatever format it came.
+struct Loaded {
+    name: String,
+    width: usize,
+    height: usize,
+    stride: usize,
+    format: PixelFormat,
+    frames: Vec<Vec<u8>>,
+    truth: Vec<BoundingBox>,
+}
+
+fn bar(len: usize, what: &str) -> ProgressBar {
+    let b = ProgressBar::new(len as u64);
+    b.set_style(
+        ProgressStyle::with_template("{prefix:>12} {msg:8} [{bar:30}] {pos}/{len}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    b.set_message(what.to_string());
+    b
+}
+
+fn load(path: &Path) -> Result<Loaded, String> {
+    if path.is_file() {
+        let fx = Fixture::load(path)?;
+        let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("fixture").to_string();
+        // Frames where the target is entirely hidden or gone are not scored.
+        let truth = fx
+            .frames
+            .iter()
+            .map(|f| if f.visible_permille == 0 { BoundingBox::default() } else { f.truth })
+            .collect();
+        let frames = fx.frames.into_iter().map(|f| f.pixels).collect();
+        return Ok(Loaded { name, width: fx.width, height: fx.height, stride: fx.stride, format: fx.format, frames, truth });
+    }
+    if !path.is_dir() {
+        return Err(format!("{}: no such file or folder", path.display()));
+    }
+    let pb = bar(0, "decode");
+    pb.set_prefix(path.file_name().and_then(|n| n.to_str()).unwrap_or("").to_string());
+    let seq = otb::load(path, |i, n| {
+        pb.set_length(n as u64);
+        pb.set_position(i as u64);
+    });
+    pb.finish_and_clear();
+    let seq = seq?;
+    Ok(Loaded {
+        name: seq.name,
+        width: seq.width,
+        height: seq.height,
+        stride: seq.width * 3,
+        format: PixelFormat::Rgb888,
+        frames: seq.frames,
+        truth: seq.truth,
+    })
+}
+
+struct Row {
+    name: String,
+    auc: f64,
+    p20: f64,
+    ms: f64,
+    frames: usize,
+    lost: usize,
+    reacquired: usize,
+}
+
+fn run_one(path: &Path, common: &Common) -> Result<Row, String> {
+    let seq = load(path)?;
+    let frames: Vec<Frame<'_>> = seq
+        .frames
+        .iter()
+        .enumerate()
+        .map(|(i, px)| {
+            Frame::new(px, seq.width, seq.height, seq.stride, seq.format)
+                .map_err(|e| format!("{}: frame {}: {e}", path.display(), i + 1))
+        })
+        .collect::<Result<_, _>>()?;
+    let init = *seq.truth.first().ok_or_else(|| format!("{}: no frames", path.display()))?;
+    if !has_target(&init) {
+        return Err(format!("{}: the first ground-truth box has no target to start from", path.display()));
+    }
+    let pb = bar(frames.len(), "track");
+    pb.set_prefix(seq.name.clone());
+    let run: Run = track(common.config, common.seed, &frames, init, |i, _| pb.set_position(i as u64))
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    pb.finish_and_clear();
+
+    if common.frames {
+        println!("appearance threshold: {:.3}", run.threshold);
+        println!("{:>5} {:>9} {:>11} {:>5} {:>4} {:>27} {:>27}", "frame", "state", "event", "conf", "app", "box", "truth");
+        for (i, e) in run.estimates.iter().enumerate() {
+            let b = e.bbox();
+            let t = seq.truth.get(i + 1).copied().unwrap_or_default();
+            println!(
+                "{:>5} {:>9} {:>11} {:>5.3} {:>4} {:>6.1},{:>6.1},{:>6.1},{:>6.1} {:>6.1},{:>6.1},{:>6.1},{:>6.1}",
+                i + 2,
+                format!("{:?}", e.state),
+                e.event.map(|v| format!("{v:?}")).unwrap_or_default(),
+                e.confidence,
+                e.appearing,
+                b.x, b.y, b.width, b.height, t.x, t.y, t.width, t.height
+            );
+        }
+    }
+    let out = common.out_dir.join(format!("{}.txt", seq.name));
+    let text: String =
+        run.boxes.iter().map(|b| format!("{:.2},{:.2},{:.2},{:.2}\n", b.x, b.y, b.width, b.height)).collect();
+    std::fs::write(&out, text).map_err(|e| format!("{}: {e}", out.display()))?;
+
+    let s = score(&run.boxes, &seq.truth).ok_or_else(|| format!("{}: no frame with a target to score", path.display()))?;
+    let count = |ev: Event| run.estimates.iter().filter(|e| e.event == Some(ev)).count();
+    Ok(Row {
+        name: seq.name,
+        auc: s.auc,
+        p20: s.precision20,
+        ms: median(&run.step_ms),
+        frames: seq.frames.len(),
+        lost: count(Event::LostTarget),
+        reacquired: count(Event::Reacquired),
+    })
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let (paths, mut common) = match cli.command {
+        Command::Otb { seqs, common } => (seqs, common),
+        Command::Fixture { files, common } => (files, common),
+    };
+    for s in &common.set {
+        if let Err(e) = host_tests::settings::apply(&mut common.config, s) {
+            eprintln!("error: --set {e}");
+            return ExitCode::FAILURE;
+        }
+    }
+    if let Err(e) = common.config.validate() {
+        eprintln!("error: {e}");
+        return ExitCode::FAILURE;
+    }
+    if let Err(e) = std::fs::create_dir_all(&common.out_dir) {
+        eprintln!("error: {}: {e}", common.out_dir.display());
+        return ExitCode::FAILURE;
+    }
+    let settings = if common.set.is_empty() { "default config".to_string() } else { common.set.join(" ") };
+    println!("pftrack, {PARTICLES} particles, seed {}, {settings}", common.seed);
+    println!("{:<22} {:>6} {:>6} {:>6} {:>9} {:>5} {:>6}", "sequence", "frames", "AUC", "P20", "ms/frame", "lost", "found");
+    let mut rows = Vec::new();
+    let mut failed = false;
+    for p in &paths {
+        match run_one(p, &common) {
+            Ok(r) => {
+                println!(
+                    "{:<22} {:>6} {:>6.3} {:>6.3} {:>9.3} {:>5} {:>6}",
+                    r.name, r.frames, r.auc, r.p20, r.ms, r.lost, r.reacquired
+                );
+                rows.push(r);
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                failed = true;
+            }
+        }
+    }
+    if rows.len() > 1 {
+        let n = rows.len() as f64;
+        println!(
+            "{:<22} {:>6} {:>6.3} {:>6.3} {:>9.3}",
+            "mean",
+            rows.iter().map(|r| r.frames).sum::<usize>(),
+            rows.iter().map(|r| r.auc).sum::<f64>() / n,
+            rows.iter().map(|r| r.p20).sum::<f64>() / n,
+            rows.iter().map(|r| r.ms).sum::<f64>() / n,
+        );
+    }
+    println!("tracks written to {}", common.out_dir.display());
+    if failed { ExitCode::FAILURE } else { ExitCode::SUCCESS }
+}

@@ -1,0 +1,108 @@
+//! OTB one-pass evaluation (DESIGN.md §3): success AUC and precision@20.
+
+use pftrack::BoundingBox;
+
+/// IoU thresholds of the success plot: 0, 0.05, …, 1.0.
+pub const SUCCESS_THRESHOLDS: usize = 21;
+
+/// Scores of one tracked sequence.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scores {
+    /// Mean over the IoU thresholds of the fraction of frames above each.
+    pub auc: f64,
+    /// Fraction of frames whose centre error is at most 20 px.
+    pub precision20: f64,
+    /// Mean IoU.
+    pub mean_iou: f64,
+    /// Frames scored (frames whose ground truth has a target).
+    pub frames: usize,
+}
+
+/// Whether a ground-truth box marks a present target (OTB marks absent
+/// targets with zero or NaN sizes).
+pub fn has_target(b: &BoundingBox) -> bool {
+    b.width > 0.0 && b.height > 0.0 && b.x.is_finite() && b.y.is_finite()
+}
+
+/// Euclidean distance between box centres.
+pub fn centre_error(a: &BoundingBox, b: &BoundingBox) -> f64 {
+    let (ax, ay) = a.centre();
+    let (bx, by) = b.centre();
+    ((ax as f64 - bx as f64).powi(2) + (ay as f64 - by as f64).powi(2)).sqrt()
+}
+
+/// The fraction of `values` strictly above `t`.
+fn fraction_above(values: &[f64], t: f64) -> f64 {
+    values.iter().filter(|&&v| v > t).count() as f64 / values.len() as f64
+}
+
+/// Scores `predicted` against `truth`, frame by frame; frames without a
+/// target in the ground truth are skipped. `None` if no frame can be scored.
+pub fn score(predicted: &[BoundingBox], truth: &[BoundingBox]) -> Option<Scores> {
+    let pairs: Vec<_> = predicted.iter().zip(truth).filter(|(_, t)| has_target(t)).collect();
+    if pairs.is_empty() {
+        return None;
+    }
+    let ious: Vec<f64> = pairs.iter().map(|(p, t)| p.iou(t) as f64).collect();
+    let errs: Vec<f64> = pairs.iter().map(|(p, t)| centre_error(p, t)).collect();
+    let auc = (0..SUCCESS_THRESHOLDS).map(|i| fraction_above(&ious, i as f64 * 0.05)).sum::<f64>()
+        / SUCCESS_THRESHOLDS as f64;
+    let precision20 = errs.iter().filter(|&&e| e <= 20.0).count() as f64 / errs.len() as f64;
+    let mean_iou = ious.iter().sum::<f64>() / ious.len() as f64;
+    Some(Scores { auc, precision20, mean_iou, frames: pairs.len() })
+}
+
+/// The median of a list (0 for an empty one).
+pub fn median(values: &[f64]) -> f64 {
+    if values.is_empty() {
+        return 0.0;
+    }
+    let mut v = values.to_vec();
+    v.sort_by(|a, b| a.total_cmp(b));
+    let n = v.len();
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn perfect_track_scores_one() {
+        // Reason: IoU 1 exceeds every threshold below 1 but not 1.0 itself
+        // (strictly above), so AUC = 20/21; centre error 0 passes P20.
+        let t = vec![BoundingBox::new(0.0, 0.0, 10.0, 10.0); 5];
+        let s = score(&t, &t).unwrap();
+        assert!((s.auc - 20.0 / 21.0).abs() < 1e-12);
+        assert_eq!(s.precision20, 1.0);
+        assert_eq!(s.mean_iou, 1.0);
+    }
+
+    #[test]
+    fn hand_computed_mixture() {
+        // One perfect frame (IoU 1) and one disjoint 30 px away (IoU 0):
+        // AUC = (20/21 + 0) / 2 by the threshold count, with threshold 0
+        // excluded for the disjoint frame since 0 is not above 0; P20 = 1/2.
+        let truth = vec![BoundingBox::new(0.0, 0.0, 10.0, 10.0); 2];
+        let pred = vec![truth[0], BoundingBox::new(30.0, 0.0, 10.0, 10.0)];
+        let s = score(&pred, &truth).unwrap();
+        assert!((s.auc - 10.0 / 21.0).abs() < 1e-12);
+        assert_eq!(s.precision20, 0.5);
+        assert!((centre_error(&pred[1], &truth[1]) - 30.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn absent_targets_are_not_scored() {
+        let truth = vec![BoundingBox::new(0.0, 0.0, 10.0, 10.0), BoundingBox::new(0.0, 0.0, 0.0, 0.0)];
+        let pred = vec![truth[0], BoundingBox::new(50.0, 50.0, 10.0, 10.0)];
+        assert_eq!(score(&pred, &truth).unwrap().frames, 1);
+        assert!(score(&pred[1..], &truth[1..]).is_none());
+    }
+
+    #[test]
+    fn median_of_even_and_odd() {
+        assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
+        assert_eq!(median(&[]), 0.0);
+    }
+}

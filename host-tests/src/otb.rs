@@ -1,0 +1,116 @@
+//! OTB-format sequences: a folder with `img/` (frames sorted by name, JPEG or
+//! PNG) and `groundtruth.txt` (one `x,y,w,h` per line).
+
+use pftrack::BoundingBox;
+use std::path::{Path, PathBuf};
+
+/// Parses ground truth: one box per line, values separated by commas, tabs
+/// or spaces. Blank lines are skipped. Errors name the line.
+pub fn parse_groundtruth(text: &str) -> Result<Vec<BoundingBox>, String> {
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() {
+            continue;
+        }
+        let vals: Vec<&str> = line.split(|c: char| c == ',' || c == '\t' || c == ' ').filter(|s| !s.is_empty()).collect();
+        if vals.len() != 4 {
+            return Err(format!("line {}: expected 4 values x,y,w,h, found {}", i + 1, vals.len()));
+        }
+        let mut v = [0f32; 4];
+        for (slot, s) in v.iter_mut().zip(&vals) {
+            // OTB marks absent targets with NaN; keep them (they are not scored).
+            *slot = s.parse::<f32>().map_err(|_| format!("line {}: `{s}` is not a number", i + 1))?;
+        }
+        out.push(BoundingBox::new(v[0], v[1], v[2], v[3]));
+    }
+    if out.is_empty() {
+        return Err("no boxes".into());
+    }
+    Ok(out)
+}
+
+/// The frame files of a sequence, sorted by name.
+pub fn list_images(dir: &Path) -> Result<Vec<PathBuf>, String> {
+    let img = dir.join("img");
+    let rd = std::fs::read_dir(&img).map_err(|e| format!("{}: {e}", img.display()))?;
+    let mut files: Vec<PathBuf> = rd
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).is_some_and(|e| {
+                matches!(e.as_str(), "jpg" | "jpeg" | "png")
+            })
+        })
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        return Err(format!("{}: no JPEG or PNG frames", img.display()));
+    }
+    Ok(files)
+}
+
+/// A decoded OTB sequence, frames as packed RGB888.
+pub struct Sequence {
+    /// The folder's name.
+    pub name: String,
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// Packed RGB888 frames.
+    pub frames: Vec<Vec<u8>>,
+    /// Ground truth, one box per frame.
+    pub truth: Vec<BoundingBox>,
+}
+
+/// Loads and decodes a sequence, checking that frames and ground truth agree.
+/// `progress` is called after each decoded frame.
+pub fn load(dir: &Path, mut progress: impl FnMut(usize, usize)) -> Result<Sequence, String> {
+    let name = dir
+        .file_name()
+        .and_then(|n| n.to_str())
+        .ok_or_else(|| format!("{}: not a sequence folder", dir.display()))?
+        .to_string();
+    let gt_path = dir.join("groundtruth.txt");
+    let text = std::fs::read_to_string(&gt_path).map_err(|e| format!("{}: {e}", gt_path.display()))?;
+    let truth = parse_groundtruth(&text).map_err(|e| format!("{}: {e}", gt_path.display()))?;
+    let files = list_images(dir)?;
+    if files.len() != truth.len() {
+        return Err(format!(
+            "{}: {} frames in img/ but {} ground-truth boxes",
+            dir.display(),
+            files.len(),
+            truth.len()
+        ));
+    }
+    let mut frames = Vec::with_capacity(files.len());
+    let (mut width, mut height) = (0, 0);
+    for (i, f) in files.iter().enumerate() {
+        let img = image::open(f).map_err(|e| format!("{}: {e}", f.display()))?.to_rgb8();
+        let (w, h) = (img.width() as usize, img.height() as usize);
+        if i == 0 {
+            (width, height) = (w, h);
+        } else if (w, h) != (width, height) {
+            return Err(format!("{}: {w}x{h}, but the first frame is {width}x{height}", f.display()));
+        }
+        frames.push(img.into_raw());
+        progress(i + 1, files.len());
+    }
+    Ok(Sequence { name, width, height, frames, truth })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn separators_and_errors() {
+        let g = parse_groundtruth("1,2,3,4\n5\t6\t7\t8\n\n9 10 11 12\n1.5, 2.5, 3, 4\n").unwrap();
+        assert_eq!(g.len(), 4);
+        assert_eq!(g[1], BoundingBox::new(5.0, 6.0, 7.0, 8.0));
+        assert_eq!(g[3].x, 1.5);
+        assert!(parse_groundtruth("1,2,3\n").unwrap_err().contains("line 1"));
+        assert!(parse_groundtruth("1,2,3,4\n1,2,x,4").unwrap_err().contains("line 2"));
+        assert!(parse_groundtruth("").is_err());
+    }
+}

@@ -1,0 +1,47 @@
+//! Runs the core tracker over a sequence of frames and times it.
+
+use pftrack::{BoundingBox, Config, Estimate, Frame, Tracker};
+use std::time::Instant;
+
+/// Particle count of the host harness (the papers' 100).
+pub const PARTICLES: usize = 100;
+
+/// The tracker type the harness uses.
+pub type HostTracker = Tracker<PARTICLES>;
+
+/// What a run produced.
+#[derive(Debug, Clone)]
+pub struct Run {
+    /// One box per frame; the first is the initial box.
+    pub boxes: Vec<BoundingBox>,
+    /// One estimate per frame after the first.
+    pub estimates: Vec<Estimate>,
+    /// Wall time of each `step`, in milliseconds (decoding excluded).
+    pub step_ms: Vec<f64>,
+    /// The appearance threshold the tracker learnt at initialisation.
+    pub threshold: f32,
+}
+
+/// Tracks `frames`, initialised on the first with `init`. `progress` is
+/// called after each frame with (done, total).
+pub fn track<'a>(
+    config: Config,
+    seed: u64,
+    frames: &[Frame<'a>],
+    init: BoundingBox,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Run, pftrack::Error> {
+    let mut tracker = Box::new(HostTracker::new(config, seed)?);
+    let first = frames.first().ok_or(pftrack::Error::NotInitialised)?;
+    tracker.init(first, init)?;
+    let mut run = Run { boxes: vec![init], estimates: Vec::new(), step_ms: Vec::new(), threshold: tracker.appearance_threshold().unwrap_or(0.0) };
+    for (i, f) in frames.iter().enumerate().skip(1) {
+        let t0 = Instant::now();
+        let est = tracker.step(f)?;
+        run.step_ms.push(t0.elapsed().as_secs_f64() * 1e3);
+        run.boxes.push(est.bbox());
+        run.estimates.push(est);
+        progress(i + 1, frames.len());
+    }
+    Ok(run)
+}

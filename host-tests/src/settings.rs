@@ -1,0 +1,109 @@
+//! `key=value` overrides of the tracker configuration, for the command line
+//! and ablation runs. Every key names a [`pftrack::Config`] field; values are
+//! validated by the core afterwards, so this only parses.
+
+use pftrack::{Binning, Config, Resampling, Sampling, Sigma};
+
+/// The keys `apply` understands, with what they set.
+pub const KEYS: &[(&str, &str)] = &[
+    ("sampling", "full | checkerboard | quarter"),
+    ("resampling", "multinomial | systematic"),
+    ("binning", "rgb8x8x8"),
+    ("sigma", "fixed σ, e.g. 0.2"),
+    ("adaptive_sigma", "MIN:MAX, e.g. 0.02:0.5 (σ chosen per frame)"),
+    ("eps", "likelihood floor ε"),
+    ("position_noise", "fraction of target size per frame"),
+    ("velocity_noise", "fraction of target size per frame"),
+    ("scale_noise", "relative, per frame"),
+    ("scale_rate_noise", "per frame"),
+    ("alpha", "model adaptation rate"),
+    ("update_threshold", "π_T"),
+    ("appearance_sigmas", "k in ρ > μ + kσ"),
+    ("min_appearance", "floor of the appearance threshold"),
+    ("kickoff", "b"),
+    ("lost_after", "frames"),
+    ("reseed_fraction", "fraction re-drawn per frame while searching"),
+    ("min_half_axis", "pixels"),
+];
+
+fn num(key: &str, v: &str) -> Result<f32, String> {
+    v.parse::<f32>().map_err(|_| format!("{key}: `{v}` is not a number"))
+}
+
+/// Applies one `key=value` setting to `c`.
+pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
+    let (key, v) = setting.split_once('=').ok_or_else(|| format!("`{setting}`: expected key=value"))?;
+    let (key, v) = (key.trim(), v.trim());
+    match key {
+        "sampling" => {
+            c.sampling = match v {
+                "full" => Sampling::Full,
+                "checkerboard" => Sampling::Checkerboard,
+                "quarter" => Sampling::Quarter,
+                _ => return Err(format!("sampling: `{v}` is not full, checkerboard or quarter")),
+            }
+        }
+        "resampling" => {
+            c.resampling = match v {
+                "multinomial" => Resampling::Multinomial,
+                "systematic" => Resampling::Systematic,
+                _ => return Err(format!("resampling: `{v}` is not multinomial or systematic")),
+            }
+        }
+        "binning" => {
+            c.binning = match v {
+                "rgb8x8x8" => Binning::Rgb8x8x8,
+                _ => return Err(format!("binning: `{v}` is not rgb8x8x8")),
+            }
+        }
+        "sigma" => c.likelihood.sigma = Sigma::Fixed(num(key, v)?),
+        "adaptive_sigma" => {
+            let (lo, hi) = v.split_once(':').ok_or_else(|| format!("adaptive_sigma: `{v}` is not MIN:MAX"))?;
+            c.likelihood.sigma = Sigma::Adaptive { min: num(key, lo)?, max: num(key, hi)? };
+        }
+        "eps" => c.likelihood.eps = num(key, v)?,
+        "position_noise" => c.dynamics.position_noise = num(key, v)?,
+        "velocity_noise" => c.dynamics.velocity_noise = num(key, v)?,
+        "scale_noise" => c.dynamics.scale_noise = num(key, v)?,
+        "scale_rate_noise" => c.dynamics.scale_rate_noise = num(key, v)?,
+        "alpha" => c.alpha = num(key, v)?,
+        "update_threshold" => c.update_threshold = num(key, v)?,
+        "appearance_sigmas" => c.appearance_sigmas = num(key, v)?,
+        "min_appearance" => c.min_appearance = num(key, v)?,
+        "kickoff" => c.kickoff = num(key, v)?,
+        "lost_after" => c.lost_after = v.parse().map_err(|_| format!("lost_after: `{v}` is not a whole number"))?,
+        "reseed_fraction" => c.reseed_fraction = num(key, v)?,
+        "min_half_axis" => c.min_half_axis = num(key, v)?,
+        _ => {
+            let known: Vec<&str> = KEYS.iter().map(|(k, _)| *k).collect();
+            return Err(format!("unknown setting `{key}`; known: {}", known.join(", ")));
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_listed_key_is_accepted() {
+        // Reason: KEYS is the help text; each must be a real setting.
+        for (k, _) in KEYS {
+            let v = match *k {
+                "sampling" => "quarter",
+                "resampling" => "multinomial",
+                "binning" => "rgb8x8x8",
+                "adaptive_sigma" => "0.1:0.3",
+                "lost_after" => "4",
+                _ => "0.5",
+            };
+            let mut c = Config::default();
+            apply(&mut c, &format!("{k}={v}")).unwrap();
+            assert_ne!(c, Config::default(), "{k} changed nothing");
+        }
+        assert!(apply(&mut Config::default(), "nope=1").is_err());
+        assert!(apply(&mut Config::default(), "sigma").is_err());
+        assert!(apply(&mut Config::default(), "sigma=abc").is_err());
+    }
+}
