@@ -67,7 +67,10 @@ impl Default for Config {
         Config {
             binning: Binning::Rgb8x8x8,
             sampling: Sampling::Full,
-            likelihood: Likelihood { sigma: Sigma::Fixed(0.2), eps: 0.0 },
+            likelihood: Likelihood {
+                sigma: Sigma::Fixed(0.2),
+                eps: 0.0,
+            },
             resampling: Resampling::Systematic,
             dynamics: Dynamics {
                 position_noise: 0.10,
@@ -89,17 +92,30 @@ impl Default for Config {
 
 fn check(field: &'static str, v: Real, lo: Real, hi: Real) -> Result<(), ConfigError> {
     if !v.is_finite() {
-        return Err(ConfigError { field, problem: ParamProblem::NonFinite });
+        return Err(ConfigError {
+            field,
+            problem: ParamProblem::NonFinite,
+        });
     }
     if !(v >= lo && v <= hi) {
-        return Err(ConfigError { field, problem: ParamProblem::OutOfRange });
+        return Err(ConfigError {
+            field,
+            problem: ParamProblem::OutOfRange,
+        });
     }
     Ok(())
 }
 
 fn positive(field: &'static str, v: Real, hi: Real) -> Result<(), ConfigError> {
     check(field, v, 0.0, hi)?;
-    if v > 0.0 { Ok(()) } else { Err(ConfigError { field, problem: ParamProblem::OutOfRange }) }
+    if v > 0.0 {
+        Ok(())
+    } else {
+        Err(ConfigError {
+            field,
+            problem: ParamProblem::OutOfRange,
+        })
+    }
 }
 
 impl Config {
@@ -111,7 +127,10 @@ impl Config {
                 positive("likelihood.sigma.min", min, 10.0)?;
                 positive("likelihood.sigma.max", max, 10.0)?;
                 if min > max {
-                    return Err(ConfigError { field: "likelihood.sigma.max", problem: ParamProblem::OutOfRange });
+                    return Err(ConfigError {
+                        field: "likelihood.sigma.max",
+                        problem: ParamProblem::OutOfRange,
+                    });
                 }
             }
         }
@@ -127,10 +146,18 @@ impl Config {
         check("min_appearance", self.min_appearance, 0.0, 1.0)?;
         positive("kickoff", self.kickoff, 1.0)?;
         if self.lost_after == 0 || self.lost_after > 1000 {
-            return Err(ConfigError { field: "lost_after", problem: ParamProblem::OutOfRange });
+            return Err(ConfigError {
+                field: "lost_after",
+                problem: ParamProblem::OutOfRange,
+            });
         }
         check("reseed_fraction", self.reseed_fraction, 0.0, 1.0)?;
-        check("min_half_axis", self.min_half_axis, 1.0, (crate::frame::MAX_DIMENSION / 2) as Real)?;
+        check(
+            "min_half_axis",
+            self.min_half_axis,
+            1.0,
+            (crate::frame::MAX_DIMENSION / 2) as Real,
+        )?;
         Ok(())
     }
 }
@@ -146,22 +173,51 @@ mod tests {
 
     #[test]
     fn each_bad_field_is_named() {
-        let cases: [(fn(&mut Config), &str, ParamProblem); 12] = [
-            (|c| c.likelihood.sigma = Sigma::Fixed(0.0), "likelihood.sigma", ParamProblem::OutOfRange),
-            (|c| c.likelihood.sigma = Sigma::Fixed(-1.0), "likelihood.sigma", ParamProblem::OutOfRange),
-            (|c| c.likelihood.sigma = Sigma::Fixed(Real::INFINITY), "likelihood.sigma", ParamProblem::NonFinite),
+        type Case = (fn(&mut Config), &'static str, ParamProblem);
+        let cases: [Case; 12] = [
+            (
+                |c| c.likelihood.sigma = Sigma::Fixed(0.0),
+                "likelihood.sigma",
+                ParamProblem::OutOfRange,
+            ),
+            (
+                |c| c.likelihood.sigma = Sigma::Fixed(-1.0),
+                "likelihood.sigma",
+                ParamProblem::OutOfRange,
+            ),
+            (
+                |c| c.likelihood.sigma = Sigma::Fixed(Real::INFINITY),
+                "likelihood.sigma",
+                ParamProblem::NonFinite,
+            ),
             (
                 |c| c.likelihood.sigma = Sigma::Adaptive { min: 0.5, max: 0.1 },
                 "likelihood.sigma.max",
                 ParamProblem::OutOfRange,
             ),
-            (|c| c.likelihood.eps = Real::NAN, "likelihood.eps", ParamProblem::NonFinite),
-            (|c| c.dynamics.position_noise = -0.1, "dynamics.position_noise", ParamProblem::OutOfRange),
-            (|c| c.dynamics.scale_noise = 1e9, "dynamics.scale_noise", ParamProblem::OutOfRange),
+            (
+                |c| c.likelihood.eps = Real::NAN,
+                "likelihood.eps",
+                ParamProblem::NonFinite,
+            ),
+            (
+                |c| c.dynamics.position_noise = -0.1,
+                "dynamics.position_noise",
+                ParamProblem::OutOfRange,
+            ),
+            (
+                |c| c.dynamics.scale_noise = 1e9,
+                "dynamics.scale_noise",
+                ParamProblem::OutOfRange,
+            ),
             (|c| c.alpha = 1.5, "alpha", ParamProblem::OutOfRange),
             (|c| c.kickoff = 0.0, "kickoff", ParamProblem::OutOfRange),
             (|c| c.lost_after = 0, "lost_after", ParamProblem::OutOfRange),
-            (|c| c.reseed_fraction = Real::NEG_INFINITY, "reseed_fraction", ParamProblem::NonFinite),
+            (
+                |c| c.reseed_fraction = Real::NEG_INFINITY,
+                "reseed_fraction",
+                ParamProblem::NonFinite,
+            ),
             (|c| c.min_half_axis = 0.5, "min_half_axis", ParamProblem::OutOfRange),
         ];
         for (mutate, field, problem) in cases {

@@ -29,12 +29,23 @@ pub struct Particle {
 impl Particle {
     /// A particle at rest on an ellipse.
     pub fn at(e: &Ellipse) -> Self {
-        Particle { x: e.cx, y: e.cy, hx: e.hx, hy: e.hy, ..Default::default() }
+        Particle {
+            x: e.cx,
+            y: e.cy,
+            hx: e.hx,
+            hy: e.hy,
+            ..Default::default()
+        }
     }
 
     /// The particle's ellipse.
     pub fn ellipse(&self) -> Ellipse {
-        Ellipse { cx: self.x, cy: self.y, hx: self.hx, hy: self.hy }
+        Ellipse {
+            cx: self.x,
+            cy: self.y,
+            hx: self.hx,
+            hy: self.hy,
+        }
     }
 }
 
@@ -168,7 +179,11 @@ pub(crate) fn resample<R: Rng, const N: usize>(
 
 /// The weighted mean state `E[S] = Σ π_i s_i` for normalised weights.
 pub(crate) fn mean_state<const N: usize>(particles: &[Particle; N], weights: &[Real; N]) -> Particle {
-    let mut m = Particle { hx: 0.0, hy: 0.0, ..Default::default() };
+    let mut m = Particle {
+        hx: 0.0,
+        hy: 0.0,
+        ..Default::default()
+    };
     for (p, &w) in particles.iter().zip(weights.iter()) {
         m.x += w * p.x;
         m.y += w * p.y;
@@ -188,15 +203,32 @@ mod tests {
     use rand_xoshiro::Xoshiro128PlusPlus;
 
     fn bounds() -> Bounds {
-        Bounds { width: 1000.0, height: 1000.0, min_half: 1.0 }
+        Bounds {
+            width: 1000.0,
+            height: 1000.0,
+            min_half: 1.0,
+        }
     }
 
     #[test]
     fn noiseless_dynamics_are_constant_velocity() {
         // Reason: with zero noise, s_t = A s_{t-1}: the centre advances by the
         // velocity each frame and the size grows by (1 + ȧ).
-        let d = Dynamics { position_noise: 0.0, velocity_noise: 0.0, scale_noise: 0.0, scale_rate_noise: 0.0 };
-        let mut p = Particle { x: 100.0, y: 200.0, vx: 3.0, vy: -2.0, hx: 10.0, hy: 20.0, a_dot: 0.05 };
+        let d = Dynamics {
+            position_noise: 0.0,
+            velocity_noise: 0.0,
+            scale_noise: 0.0,
+            scale_rate_noise: 0.0,
+        };
+        let mut p = Particle {
+            x: 100.0,
+            y: 200.0,
+            vx: 3.0,
+            vy: -2.0,
+            hx: 10.0,
+            hy: 20.0,
+            a_dot: 0.05,
+        };
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(1);
         for _ in 0..10 {
             d.propagate(&mut p, &bounds(), &mut rng);
@@ -211,12 +243,24 @@ mod tests {
     fn position_noise_has_the_configured_spread() {
         // Reason: for a 20x20 particle s = 20, so position noise 0.1 gives a
         // one-step standard deviation of 2 px around the predicted centre.
-        let d = Dynamics { position_noise: 0.1, velocity_noise: 0.0, scale_noise: 0.0, scale_rate_noise: 0.0 };
+        let d = Dynamics {
+            position_noise: 0.1,
+            velocity_noise: 0.0,
+            scale_noise: 0.0,
+            scale_rate_noise: 0.0,
+        };
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(7);
         let n = 20_000;
         let (mut s1, mut s2) = (0.0f64, 0.0f64);
         for _ in 0..n {
-            let mut p = Particle { x: 500.0, y: 500.0, vx: 1.0, hx: 10.0, hy: 10.0, ..Default::default() };
+            let mut p = Particle {
+                x: 500.0,
+                y: 500.0,
+                vx: 1.0,
+                hx: 10.0,
+                hy: 10.0,
+                ..Default::default()
+            };
             d.propagate(&mut p, &bounds(), &mut rng);
             let dx = (p.x - 501.0) as f64;
             s1 += dx;
@@ -230,15 +274,31 @@ mod tests {
 
     #[test]
     fn centre_stays_in_frame_and_stops_at_the_border() {
-        let d = Dynamics { position_noise: 0.0, velocity_noise: 0.0, scale_noise: 0.0, scale_rate_noise: 0.0 };
-        let mut p = Particle { x: 5.0, y: 5.0, vx: -10.0, vy: 0.0, hx: 4.0, hy: 4.0, a_dot: 0.0 };
+        let d = Dynamics {
+            position_noise: 0.0,
+            velocity_noise: 0.0,
+            scale_noise: 0.0,
+            scale_rate_noise: 0.0,
+        };
+        let mut p = Particle {
+            x: 5.0,
+            y: 5.0,
+            vx: -10.0,
+            vy: 0.0,
+            hx: 4.0,
+            hy: 4.0,
+            a_dot: 0.0,
+        };
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(1);
         d.propagate(&mut p, &bounds(), &mut rng);
         assert_eq!((p.x, p.vx), (0.0, 0.0));
     }
 
     fn line_particles<const N: usize>() -> [Particle; N] {
-        core::array::from_fn(|i| Particle { x: i as Real, ..Default::default() })
+        core::array::from_fn(|i| Particle {
+            x: i as Real,
+            ..Default::default()
+        })
     }
 
     #[test]

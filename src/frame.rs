@@ -103,7 +103,7 @@ impl<'a> Frame<'a> {
         if width > MAX_DIMENSION || height > MAX_DIMENSION {
             return Err(FrameError::TooLarge { width, height });
         }
-        if format == PixelFormat::Yuv422 && width % 2 != 0 {
+        if format == PixelFormat::Yuv422 && !width.is_multiple_of(2) {
             return Err(FrameError::OddYuvWidth { width });
         }
         let row_bytes = width * format.bytes_per_pixel();
@@ -113,16 +113,34 @@ impl<'a> Frame<'a> {
         let needed = stride
             .checked_mul(height - 1)
             .and_then(|b| b.checked_add(row_bytes))
-            .ok_or(FrameError::BufferTooSmall { needed: usize::MAX, got: data.len() })?;
+            .ok_or(FrameError::BufferTooSmall {
+                needed: usize::MAX,
+                got: data.len(),
+            })?;
         if data.len() < needed {
-            return Err(FrameError::BufferTooSmall { needed, got: data.len() });
+            return Err(FrameError::BufferTooSmall {
+                needed,
+                got: data.len(),
+            });
         }
-        Ok(Frame { data, width, height, stride, format })
+        Ok(Frame {
+            data,
+            width,
+            height,
+            stride,
+            format,
+        })
     }
 
     /// A tightly packed frame: the stride is `width * bytes_per_pixel`.
     pub fn packed(data: &'a [u8], width: usize, height: usize, format: PixelFormat) -> Result<Self, FrameError> {
-        Self::new(data, width, height, width.saturating_mul(format.bytes_per_pixel()), format)
+        Self::new(
+            data,
+            width,
+            height,
+            width.saturating_mul(format.bytes_per_pixel()),
+            format,
+        )
     }
 
     /// Width in pixels.
@@ -156,7 +174,7 @@ impl<'a> Frame<'a> {
     /// The colour of pixel `(x, y)` as 8-bit RGB, or `None` outside the frame.
     ///
     /// This is the slow, general accessor for tools and tests; the histogram
-    /// loops use the same conversion through [`PixelRead`] on whole rows.
+    /// loops use the same conversion, compiled once per format, on whole rows.
     pub fn rgb(&self, x: usize, y: usize) -> Option<[u8; 3]> {
         let row = self.row(y)?;
         if x >= self.width {
@@ -261,10 +279,16 @@ mod tests {
     #[test]
     fn rejects_inconsistent_dimensions() {
         let buf = [0u8; 100];
-        assert_eq!(Frame::new(&buf, 0, 2, 8, PixelFormat::Gray8).err(), Some(FrameError::ZeroSize));
+        assert_eq!(
+            Frame::new(&buf, 0, 2, 8, PixelFormat::Gray8).err(),
+            Some(FrameError::ZeroSize)
+        );
         assert_eq!(
             Frame::new(&buf, 5, 2, 8, PixelFormat::Rgb565).err(),
-            Some(FrameError::StrideTooSmall { stride: 8, row_bytes: 10 })
+            Some(FrameError::StrideTooSmall {
+                stride: 8,
+                row_bytes: 10
+            })
         );
         assert_eq!(
             Frame::new(&buf, 10, 10, 10, PixelFormat::Gray8).err(),
@@ -275,8 +299,14 @@ mod tests {
             Frame::new(&buf, 10, 11, 10, PixelFormat::Gray8).err(),
             Some(FrameError::BufferTooSmall { needed: 110, got: 100 })
         );
-        assert_eq!(Frame::new(&buf, 3, 1, 8, PixelFormat::Yuv422).err(), Some(FrameError::OddYuvWidth { width: 3 }));
-        assert!(matches!(Frame::new(&buf, 5000, 1, 5000, PixelFormat::Gray8), Err(FrameError::TooLarge { .. })));
+        assert_eq!(
+            Frame::new(&buf, 3, 1, 8, PixelFormat::Yuv422).err(),
+            Some(FrameError::OddYuvWidth { width: 3 })
+        );
+        assert!(matches!(
+            Frame::new(&buf, 5000, 1, 5000, PixelFormat::Gray8),
+            Err(FrameError::TooLarge { .. })
+        ));
         // A stride so large that stride * (height - 1) overflows.
         assert!(matches!(
             Frame::new(&buf, 1, 3, usize::MAX / 2 + 1, PixelFormat::Gray8),
@@ -296,7 +326,9 @@ mod tests {
         let f = Frame::new(&buf, 2, 2, 6, PixelFormat::Rgb565).unwrap_or_else(|e| panic!("{e:?}"));
         let got = f.rgb(1, 1).unwrap_or_default();
         // RGB565 keeps 5/6/5 bits: errors up to 7/3/7.
-        assert!((got[0] as i32 - 200).abs() <= 7 && (got[1] as i32 - 100).abs() <= 3 && (got[2] as i32 - 50).abs() <= 7);
+        assert!(
+            (got[0] as i32 - 200).abs() <= 7 && (got[1] as i32 - 100).abs() <= 3 && (got[2] as i32 - 50).abs() <= 7
+        );
         assert_eq!(f.rgb(2, 1), None);
         assert_eq!(f.rgb(0, 2), None);
 

@@ -178,7 +178,10 @@ impl<const K: usize> Default for Histogram<K> {
 impl<const K: usize> Histogram<K> {
     /// An empty histogram.
     pub const fn new() -> Self {
-        Histogram { counts: [0; K], total: 0 }
+        Histogram {
+            counts: [0; K],
+            total: 0,
+        }
     }
 
     /// The raw weighted counts.
@@ -262,7 +265,10 @@ impl<const K: usize> Model<K> {
         if h.total == 0 {
             return None;
         }
-        let mut m = Model { q: [0; K], sqrt_q: [0; K] };
+        let mut m = Model {
+            q: [0; K],
+            sqrt_q: [0; K],
+        };
         for (q, &c) in m.q.iter_mut().zip(h.counts.iter()) {
             *q = normalised(c, h.total);
         }
@@ -319,7 +325,11 @@ impl<const K: usize> Model<K> {
         }
         // Σ 16·sqrt(c) · 4096·sqrt(q) / (16·sqrt(C) · 4096)
         let denom = sqrt_q4(h.total) as Real * 4096.0;
-        if denom > 0.0 { (sum as Real / denom).clamp(0.0, 1.0) } else { 0.0 }
+        if denom > 0.0 {
+            (sum as Real / denom).clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
     }
 }
 
@@ -363,12 +373,20 @@ mod tests {
         let buf = vec![0u8; 200 * 200];
         let f = gray_frame(&buf, 200, 200);
         for (a, b) in [(20.0f32, 20.0f32), (30.0, 12.0), (7.0, 15.0)] {
-            let e = Ellipse { cx: 100.0, cy: 100.0, hx: a, hy: b };
+            let e = Ellipse {
+                cx: 100.0,
+                cy: 100.0,
+                hx: a,
+                hy: b,
+            };
             let (n, mass) = count_pixels(&f, &e, Sampling::Full);
             let area = core::f64::consts::PI * a as f64 * b as f64;
             assert!((n as f64 - area).abs() / area < 0.05, "{a}x{b}: {n} px vs {area}");
             let want_mass = 256.0 * area / 2.0;
-            assert!((mass as f64 - want_mass).abs() / want_mass < 0.05, "{a}x{b}: mass {mass} vs {want_mass}");
+            assert!(
+                (mass as f64 - want_mass).abs() / want_mass < 0.05,
+                "{a}x{b}: mass {mass} vs {want_mass}"
+            );
 
             // Reason: checkerboard reads every other pixel, quarter one in four.
             let (nc, mc) = count_pixels(&f, &e, Sampling::Checkerboard);
@@ -386,15 +404,74 @@ mod tests {
         // the frame (the column x = 0 is the centre column, so a bit more).
         let buf = vec![0u8; 100 * 100];
         let f = gray_frame(&buf, 100, 100);
-        let inside = count_pixels(&f, &Ellipse { cx: 50.0, cy: 50.0, hx: 10.0, hy: 10.0 }, Sampling::Full).0;
-        let edge = count_pixels(&f, &Ellipse { cx: 0.0, cy: 50.0, hx: 10.0, hy: 10.0 }, Sampling::Full).0;
+        let inside = count_pixels(
+            &f,
+            &Ellipse {
+                cx: 50.0,
+                cy: 50.0,
+                hx: 10.0,
+                hy: 10.0,
+            },
+            Sampling::Full,
+        )
+        .0;
+        let edge = count_pixels(
+            &f,
+            &Ellipse {
+                cx: 0.0,
+                cy: 50.0,
+                hx: 10.0,
+                hy: 10.0,
+            },
+            Sampling::Full,
+        )
+        .0;
         let frac = edge as f64 / inside as f64;
         assert!(frac > 0.5 && frac < 0.6, "{edge} of {inside}");
         // Entirely outside: nothing, and no panic.
-        assert_eq!(count_pixels(&f, &Ellipse { cx: -50.0, cy: 50.0, hx: 10.0, hy: 10.0 }, Sampling::Full).0, 0);
-        assert_eq!(count_pixels(&f, &Ellipse { cx: Real::NAN, cy: 50.0, hx: 10.0, hy: 10.0 }, Sampling::Full).0, 0);
+        assert_eq!(
+            count_pixels(
+                &f,
+                &Ellipse {
+                    cx: -50.0,
+                    cy: 50.0,
+                    hx: 10.0,
+                    hy: 10.0
+                },
+                Sampling::Full
+            )
+            .0,
+            0
+        );
+        assert_eq!(
+            count_pixels(
+                &f,
+                &Ellipse {
+                    cx: Real::NAN,
+                    cy: 50.0,
+                    hx: 10.0,
+                    hy: 10.0
+                },
+                Sampling::Full
+            )
+            .0,
+            0
+        );
         // A degenerate ellipse still reads its centre pixel.
-        assert_eq!(count_pixels(&f, &Ellipse { cx: 5.5, cy: 5.5, hx: 0.0, hy: 0.0 }, Sampling::Full).0, 1);
+        assert_eq!(
+            count_pixels(
+                &f,
+                &Ellipse {
+                    cx: 5.5,
+                    cy: 5.5,
+                    hx: 0.0,
+                    hy: 0.0
+                },
+                Sampling::Full
+            )
+            .0,
+            1
+        );
     }
 
     #[test]
@@ -406,7 +483,12 @@ mod tests {
             *p = (i * 37 % 251) as u8;
         }
         let f = gray_frame(&buf, 64, 64);
-        let e = Ellipse { cx: 30.0, cy: 33.0, hx: 12.0, hy: 9.0 };
+        let e = Ellipse {
+            cx: 30.0,
+            cy: 33.0,
+            hx: 12.0,
+            hy: 9.0,
+        };
         let mut h = Histogram::<512>::new();
         h.compute(&f, &e, Binning::Rgb8x8x8, Sampling::Full);
         let sum: u64 = h.counts().iter().map(|&c| c as u64).sum();
@@ -420,7 +502,11 @@ mod tests {
 
     fn reference_rho(p: &Histogram<512>, q: &Histogram<512>) -> f64 {
         let (tp, tq) = (p.total() as f64, q.total() as f64);
-        p.counts().iter().zip(q.counts().iter()).map(|(&a, &b)| ((a as f64 / tp) * (b as f64 / tq)).sqrt()).sum()
+        p.counts()
+            .iter()
+            .zip(q.counts().iter())
+            .map(|(&a, &b)| ((a as f64 / tp) * (b as f64 / tq)).sqrt())
+            .sum()
     }
 
     #[test]
@@ -492,7 +578,10 @@ mod tests {
     fn rgb_binning_uses_top_three_bits() {
         assert_eq!(Binning::Rgb8x8x8.bin([0, 0, 0]), 0);
         assert_eq!(Binning::Rgb8x8x8.bin([255, 255, 255]), 511);
-        assert_eq!(Binning::Rgb8x8x8.bin([0b1010_0000, 0b0110_0000, 0b0010_0000]), (5 << 6) | (3 << 3) | 1);
+        assert_eq!(
+            Binning::Rgb8x8x8.bin([0b1010_0000, 0b0110_0000, 0b0010_0000]),
+            (5 << 6) | (3 << 3) | 1
+        );
     }
 
     #[test]

@@ -153,7 +153,20 @@ mod tests {
         // Reason: 16*sqrt(x) rounded down, compared with the f64 value; the
         // large-x branch drops up to 4 fractional bits, i.e. < 16 units of 2^-4,
         // which is below 1e-3 relative for x >= 2^24.
-        for x in [0u32, 1, 2, 3, 255, 256, 1000, 65_535, (1 << 24) - 1, 1 << 24, 1 << 30, u32::MAX] {
+        for x in [
+            0u32,
+            1,
+            2,
+            3,
+            255,
+            256,
+            1000,
+            65_535,
+            (1 << 24) - 1,
+            1 << 24,
+            1 << 30,
+            u32::MAX,
+        ] {
             let got = sqrt_q4(x) as f64;
             let want = 16.0 * (x as f64).sqrt();
             assert!(got <= want + 1e-9, "x={x}");

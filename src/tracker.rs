@@ -137,7 +137,11 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
         }
         config.validate()?;
         if config.binning.bins() > K {
-            return Err(ConfigError { field: "binning", problem: ParamProblem::OutOfRange }.into());
+            return Err(ConfigError {
+                field: "binning",
+                problem: ParamProblem::OutOfRange,
+            }
+            .into());
         }
         Ok(Tracker {
             config,
@@ -244,7 +248,8 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
             while x + bbox.width <= fw {
                 let cand = BoundingBox::new(x, y, bbox.width, bbox.height);
                 if cand.iou(bbox) == 0.0 {
-                    self.histogram.compute(frame, &Ellipse::from_box(&cand), binning, sampling);
+                    self.histogram
+                        .compute(frame, &Ellipse::from_box(&cand), binning, sampling);
                     let rho = model.bhattacharyya(&self.histogram);
                     n += 1;
                     s1 += rho;
@@ -259,7 +264,9 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
         let threshold = if n >= 2 {
             let mean = s1 / n as Real;
             let var = (s2 / n as Real - mean * mean).max(0.0);
-            (mean + self.config.appearance_sigmas * sqrt(var)).max(self.config.min_appearance).min(1.0)
+            (mean + self.config.appearance_sigmas * sqrt(var))
+                .max(self.config.min_appearance)
+                .min(1.0)
         } else {
             self.config.min_appearance
         };
@@ -282,13 +289,26 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
         };
         let size = (frame.width(), frame.height());
         if size != target.frame {
-            return Err(Error::FrameSizeChanged { expected: target.frame, got: size });
+            return Err(Error::FrameSizeChanged {
+                expected: target.frame,
+                got: size,
+            });
         }
         let cfg = &self.config;
-        let bounds = Bounds { width: size.0 as Real, height: size.1 as Real, min_half: cfg.min_half_axis };
+        let bounds = Bounds {
+            width: size.0 as Real,
+            height: size.1 as Real,
+            min_half: cfg.min_half_axis,
+        };
 
         // 1. Resample in proportion to the last step's weights, 2. propagate.
-        resample(&self.particles, &mut self.weights, &mut self.scratch, cfg.resampling, &mut self.rng);
+        resample(
+            &self.particles,
+            &mut self.weights,
+            &mut self.scratch,
+            cfg.resampling,
+            &mut self.rng,
+        );
         self.particles = self.scratch;
         for p in self.particles.iter_mut() {
             cfg.dynamics.propagate(p, &bounds, &mut self.rng);
@@ -299,7 +319,7 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
             let (hx, hy) = target.half_axes;
             // Spread over the set: systematic resampling leaves it ordered by
             // parent, and the first few would all be descendants of one.
-            let stride = if reseed > 0 { N / reseed } else { N };
+            let stride = N.checked_div(reseed).unwrap_or(N);
             for p in self.particles.iter_mut().step_by(stride.max(1)).take(reseed) {
                 *p = uniform_particle(&mut self.rng, size.0, size.1, hx, hy);
             }
@@ -353,7 +373,11 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
                 }
             }
             TrackState::Searching | TrackState::Lost if seen => {
-                event = Some(if self.state == TrackState::Searching { Event::Acquired } else { Event::Reacquired });
+                event = Some(if self.state == TrackState::Searching {
+                    Event::Acquired
+                } else {
+                    Event::Reacquired
+                });
                 self.state = TrackState::Tracking;
                 self.misses = 0;
             }
@@ -374,7 +398,15 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
             target.half_axes = (ellipse.hx, ellipse.hy);
         }
 
-        Ok(Estimate { ellipse, confidence, state: self.state, event, appearing, model_updated, sigma })
+        Ok(Estimate {
+            ellipse,
+            confidence,
+            state: self.state,
+            event,
+            appearing,
+            model_updated,
+            sigma,
+        })
     }
 }
 
@@ -382,5 +414,11 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
 fn uniform_particle<R: Rng>(rng: &mut R, width: usize, height: usize, hx: Real, hy: Real) -> Particle {
     let x = unit_from_bits(rng.next_u32()) * width as Real;
     let y = unit_from_bits(rng.next_u32()) * height as Real;
-    Particle { x, y, hx, hy, ..Default::default() }
+    Particle {
+        x,
+        y,
+        hx,
+        hy,
+        ..Default::default()
+    }
 }

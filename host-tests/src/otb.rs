@@ -13,14 +13,20 @@ pub fn parse_groundtruth(text: &str) -> Result<Vec<BoundingBox>, String> {
         if line.is_empty() {
             continue;
         }
-        let vals: Vec<&str> = line.split(|c: char| c == ',' || c == '\t' || c == ' ').filter(|s| !s.is_empty()).collect();
+        let vals: Vec<&str> = line.split([',', '\t', ' ']).filter(|s| !s.is_empty()).collect();
         if vals.len() != 4 {
-            return Err(format!("line {}: expected 4 values x,y,w,h, found {}", i + 1, vals.len()));
+            return Err(format!(
+                "line {}: expected 4 values x,y,w,h, found {}",
+                i + 1,
+                vals.len()
+            ));
         }
         let mut v = [0f32; 4];
         for (slot, s) in v.iter_mut().zip(&vals) {
             // OTB marks absent targets with NaN; keep them (they are not scored).
-            *slot = s.parse::<f32>().map_err(|_| format!("line {}: `{s}` is not a number", i + 1))?;
+            *slot = s
+                .parse::<f32>()
+                .map_err(|_| format!("line {}: `{s}` is not a number", i + 1))?;
         }
         out.push(BoundingBox::new(v[0], v[1], v[2], v[3]));
     }
@@ -37,9 +43,10 @@ pub fn list_images(dir: &Path) -> Result<Vec<PathBuf>, String> {
     let mut files: Vec<PathBuf> = rd
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| {
-            p.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).is_some_and(|e| {
-                matches!(e.as_str(), "jpg" | "jpeg" | "png")
-            })
+            p.extension()
+                .and_then(|e| e.to_str())
+                .map(|e| e.to_ascii_lowercase())
+                .is_some_and(|e| matches!(e.as_str(), "jpg" | "jpeg" | "png"))
         })
         .collect();
     files.sort();
@@ -91,12 +98,21 @@ pub fn load(dir: &Path, mut progress: impl FnMut(usize, usize)) -> Result<Sequen
         if i == 0 {
             (width, height) = (w, h);
         } else if (w, h) != (width, height) {
-            return Err(format!("{}: {w}x{h}, but the first frame is {width}x{height}", f.display()));
+            return Err(format!(
+                "{}: {w}x{h}, but the first frame is {width}x{height}",
+                f.display()
+            ));
         }
         frames.push(img.into_raw());
         progress(i + 1, files.len());
     }
-    Ok(Sequence { name, width, height, frames, truth })
+    Ok(Sequence {
+        name,
+        width,
+        height,
+        frames,
+        truth,
+    })
 }
 
 #[cfg(test)]

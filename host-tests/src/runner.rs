@@ -34,7 +34,12 @@ pub fn track<'a>(
     let mut tracker = Box::new(HostTracker::new(config, seed)?);
     let first = frames.first().ok_or(pftrack::Error::NotInitialised)?;
     tracker.init(first, init)?;
-    let mut run = Run { boxes: vec![init], estimates: Vec::new(), step_ms: Vec::new(), threshold: tracker.appearance_threshold().unwrap_or(0.0) };
+    let mut run = Run {
+        boxes: vec![init],
+        estimates: Vec::new(),
+        step_ms: Vec::new(),
+        threshold: tracker.appearance_threshold().unwrap_or(0.0),
+    };
     for (i, f) in frames.iter().enumerate().skip(1) {
         let t0 = Instant::now();
         let est = tracker.step(f)?;

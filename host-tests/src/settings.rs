@@ -32,7 +32,9 @@ fn num(key: &str, v: &str) -> Result<f32, String> {
 
 /// Applies one `key=value` setting to `c`.
 pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
-    let (key, v) = setting.split_once('=').ok_or_else(|| format!("`{setting}`: expected key=value"))?;
+    let (key, v) = setting
+        .split_once('=')
+        .ok_or_else(|| format!("`{setting}`: expected key=value"))?;
     let (key, v) = (key.trim(), v.trim());
     match key {
         "sampling" => {
@@ -58,8 +60,13 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
         }
         "sigma" => c.likelihood.sigma = Sigma::Fixed(num(key, v)?),
         "adaptive_sigma" => {
-            let (lo, hi) = v.split_once(':').ok_or_else(|| format!("adaptive_sigma: `{v}` is not MIN:MAX"))?;
-            c.likelihood.sigma = Sigma::Adaptive { min: num(key, lo)?, max: num(key, hi)? };
+            let (lo, hi) = v
+                .split_once(':')
+                .ok_or_else(|| format!("adaptive_sigma: `{v}` is not MIN:MAX"))?;
+            c.likelihood.sigma = Sigma::Adaptive {
+                min: num(key, lo)?,
+                max: num(key, hi)?,
+            };
         }
         "eps" => c.likelihood.eps = num(key, v)?,
         "position_noise" => c.dynamics.position_noise = num(key, v)?,
@@ -71,7 +78,11 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
         "appearance_sigmas" => c.appearance_sigmas = num(key, v)?,
         "min_appearance" => c.min_appearance = num(key, v)?,
         "kickoff" => c.kickoff = num(key, v)?,
-        "lost_after" => c.lost_after = v.parse().map_err(|_| format!("lost_after: `{v}` is not a whole number"))?,
+        "lost_after" => {
+            c.lost_after = v
+                .parse()
+                .map_err(|_| format!("lost_after: `{v}` is not a whole number"))?
+        }
         "reseed_fraction" => c.reseed_fraction = num(key, v)?,
         "min_half_axis" => c.min_half_axis = num(key, v)?,
         _ => {
@@ -96,11 +107,14 @@ mod tests {
                 "binning" => "rgb8x8x8",
                 "adaptive_sigma" => "0.1:0.3",
                 "lost_after" => "4",
-                _ => "0.5",
+                _ => "0.07",
             };
             let mut c = Config::default();
             apply(&mut c, &format!("{k}={v}")).unwrap();
-            assert_ne!(c, Config::default(), "{k} changed nothing");
+            // Binning has a single choice so far: setting it cannot change anything.
+            if *k != "binning" {
+                assert_ne!(c, Config::default(), "{k} changed nothing");
+            }
         }
         assert!(apply(&mut Config::default(), "nope=1").is_err());
         assert!(apply(&mut Config::default(), "sigma").is_err());

@@ -45,7 +45,15 @@ fn main() -> ExitCode {
             eprintln!("error: {}: {e}", path.display());
             ok = false;
         } else {
-            println!("{}: {} frames {:?} {}x{}, {} bytes", path.display(), spec.frames, spec.format, spec.width, spec.height, bytes.len());
+            println!(
+                "{}: {} frames {:?} {}x{}, {} bytes",
+                path.display(),
+                spec.frames,
+                spec.format,
+                spec.width,
+                spec.height,
+                bytes.len()
+            );
         }
     }
     if ok { ExitCode::SUCCESS } else { ExitCode::FAILURE }

@@ -82,15 +82,33 @@ fn bar(len: usize, what: &str) -> ProgressBar {
 fn load(path: &Path) -> Result<Loaded, String> {
     if path.is_file() {
         let fx = Fixture::load(path)?;
-        let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("fixture").to_string();
+        let name = path
+            .file_stem()
+            .and_then(|s| s.to_str())
+            .unwrap_or("fixture")
+            .to_string();
         // Frames where the target is entirely hidden or gone are not scored.
         let truth = fx
             .frames
             .iter()
-            .map(|f| if f.visible_permille == 0 { BoundingBox::default() } else { f.truth })
+            .map(|f| {
+                if f.visible_permille == 0 {
+                    BoundingBox::default()
+                } else {
+                    f.truth
+                }
+            })
             .collect();
         let frames = fx.frames.into_iter().map(|f| f.pixels).collect();
-        return Ok(Loaded { name, width: fx.width, height: fx.height, stride: fx.stride, format: fx.format, frames, truth });
+        return Ok(Loaded {
+            name,
+            width: fx.width,
+            height: fx.height,
+            stride: fx.stride,
+            format: fx.format,
+            frames,
+            truth,
+        });
     }
     if !path.is_dir() {
         return Err(format!("{}: no such file or folder", path.display()));
@@ -135,19 +153,30 @@ fn run_one(path: &Path, common: &Common) -> Result<Row, String> {
                 .map_err(|e| format!("{}: frame {}: {e}", path.display(), i + 1))
         })
         .collect::<Result<_, _>>()?;
-    let init = *seq.truth.first().ok_or_else(|| format!("{}: no frames", path.display()))?;
+    let init = *seq
+        .truth
+        .first()
+        .ok_or_else(|| format!("{}: no frames", path.display()))?;
     if !has_target(&init) {
-        return Err(format!("{}: the first ground-truth box has no target to start from", path.display()));
+        return Err(format!(
+            "{}: the first ground-truth box has no target to start from",
+            path.display()
+        ));
     }
     let pb = bar(frames.len(), "track");
     pb.set_prefix(seq.name.clone());
-    let run: Run = track(common.config, common.seed, &frames, init, |i, _| pb.set_position(i as u64))
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+    let run: Run = track(common.config, common.seed, &frames, init, |i, _| {
+        pb.set_position(i as u64)
+    })
+    .map_err(|e| format!("{}: {e}", path.display()))?;
     pb.finish_and_clear();
 
     if common.frames {
         println!("appearance threshold: {:.3}", run.threshold);
-        println!("{:>5} {:>9} {:>11} {:>5} {:>4} {:>27} {:>27}", "frame", "state", "event", "conf", "app", "box", "truth");
+        println!(
+            "{:>5} {:>9} {:>11} {:>5} {:>4} {:>27} {:>27}",
+            "frame", "state", "event", "conf", "app", "box", "truth"
+        );
         for (i, e) in run.estimates.iter().enumerate() {
             let b = e.bbox();
             let t = seq.truth.get(i + 1).copied().unwrap_or_default();
@@ -158,16 +187,27 @@ fn run_one(path: &Path, common: &Common) -> Result<Row, String> {
                 e.event.map(|v| format!("{v:?}")).unwrap_or_default(),
                 e.confidence,
                 e.appearing,
-                b.x, b.y, b.width, b.height, t.x, t.y, t.width, t.height
+                b.x,
+                b.y,
+                b.width,
+                b.height,
+                t.x,
+                t.y,
+                t.width,
+                t.height
             );
         }
     }
     let out = common.out_dir.join(format!("{}.txt", seq.name));
-    let text: String =
-        run.boxes.iter().map(|b| format!("{:.2},{:.2},{:.2},{:.2}\n", b.x, b.y, b.width, b.height)).collect();
+    let text: String = run
+        .boxes
+        .iter()
+        .map(|b| format!("{:.2},{:.2},{:.2},{:.2}\n", b.x, b.y, b.width, b.height))
+        .collect();
     std::fs::write(&out, text).map_err(|e| format!("{}: {e}", out.display()))?;
 
-    let s = score(&run.boxes, &seq.truth).ok_or_else(|| format!("{}: no frame with a target to score", path.display()))?;
+    let s =
+        score(&run.boxes, &seq.truth).ok_or_else(|| format!("{}: no frame with a target to score", path.display()))?;
     let count = |ev: Event| run.estimates.iter().filter(|e| e.event == Some(ev)).count();
     Ok(Row {
         name: seq.name,
@@ -200,9 +240,16 @@ fn main() -> ExitCode {
         eprintln!("error: {}: {e}", common.out_dir.display());
         return ExitCode::FAILURE;
     }
-    let settings = if common.set.is_empty() { "default config".to_string() } else { common.set.join(" ") };
+    let settings = if common.set.is_empty() {
+        "default config".to_string()
+    } else {
+        common.set.join(" ")
+    };
     println!("pftrack, {PARTICLES} particles, seed {}, {settings}", common.seed);
-    println!("{:<22} {:>6} {:>6} {:>6} {:>9} {:>5} {:>6}", "sequence", "frames", "AUC", "P20", "ms/frame", "lost", "found");
+    println!(
+        "{:<22} {:>6} {:>6} {:>6} {:>9} {:>5} {:>6}",
+        "sequence", "frames", "AUC", "P20", "ms/frame", "lost", "found"
+    );
     let mut rows = Vec::new();
     let mut failed = false;
     for p in &paths {

@@ -1,0 +1,295 @@
+//! The tracker on the committed fixtures, judged against their exact ground
+//! truth. Each threshold says why it is the right one.
+
+use host_tests::fixture::Fixture;
+use host_tests::metrics::centre_error;
+use host_tests::scene::{catalogue, generate};
+use pftrack::{BoundingBox, Config, Estimate, Event, Frame, TrackState, Tracker};
+use std::path::PathBuf;
+
+/// Seeds every tracking claim is checked under: a claim that holds for one
+/// lucky seed only is not a property of the tracker.
+const SEEDS: [u64; 3] = [1, 2, 3];
+
+fn load(name: &str) -> Fixture {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../fixtures")
+        .join(format!("{name}.pft"));
+    Fixture::load(&path).unwrap()
+}
+
+fn frames(fx: &Fixture) -> Vec<Frame<'_>> {
+    (0..fx.frames.len()).map(|i| fx.frame(i).unwrap()).collect()
+}
+
+/// Runs the default tracker; returns the estimates of frames 1.. and the
+/// model's bins after each of them.
+fn run(fx: &Fixture, seed: u64) -> (Vec<Estimate>, Vec<Vec<u16>>) {
+    let fr = frames(fx);
+    let mut t: Box<Tracker<100>> = Box::new(Tracker::new(Config::default(), seed).unwrap());
+    t.init(&fr[0], fx.frames[0].truth).unwrap();
+    let mut est = Vec::new();
+    let mut models = Vec::new();
+    for f in &fr[1..] {
+        est.push(t.step(f).unwrap());
+        models.push(t.model().unwrap().bins().to_vec());
+    }
+    (est, models)
+}
+
+/// Whether the estimate's centre lies inside the target's true ellipse: the
+/// tracker is on the target, not beside it.
+fn on_target(e: &Estimate, truth: &BoundingBox) -> bool {
+    let (tx, ty) = truth.centre();
+    let (ex, ey) = e.bbox().centre();
+    let (a, b) = (0.5 * truth.width, 0.5 * truth.height);
+    ((ex - tx) / a).powi(2) + ((ey - ty) / b).powi(2) <= 1.0
+}
+
+#[test]
+fn committed_fixtures_are_what_the_generator_makes() {
+    // Reason: the ground truth is exact only if the pixels came from the
+    // generator that computed it; regenerating must give the same bytes.
+    for spec in catalogue() {
+        let fx = load(spec.name);
+        assert!(
+            fx == generate(&spec),
+            "{} differs from the generator's output",
+            spec.name
+        );
+    }
+}
+
+#[test]
+fn follows_smooth_scaling_gray_and_occluded_targets() {
+    // Reason: with the target fully visible and unlike the background, the
+    // estimate's centre must lie inside the true ellipse on at least 90% of
+    // frames, and the mean IoU must reach 0.5, the usual "success" overlap.
+    // (The estimate's size only diffuses; the scale-change scene's target
+    // grows 40%, which costs IoU but not the centre.)
+    // The distractor scene is left out on purpose: its decoy has the same
+    // colours, which colour alone cannot always tell apart.
+    for name in ["smooth_scale", "gray_smooth", "occlusion"] {
+        let fx = load(name);
+        for seed in SEEDS {
+            let (est, _) = run(&fx, seed);
+            let visible: Vec<usize> = (1..fx.frames.len())
+                .filter(|&i| fx.frames[i].visible_permille >= 500)
+                .collect();
+            let inside = visible
+                .iter()
+                .filter(|&&i| on_target(&est[i - 1], &fx.frames[i].truth))
+                .count();
+            let frac = inside as f64 / visible.len() as f64;
+            assert!(
+                frac >= 0.9,
+                "{name} seed {seed}: centre on target in {frac:.2} of visible frames"
+            );
+            let iou: f64 = visible
+                .iter()
+                .map(|&i| est[i - 1].bbox().iou(&fx.frames[i].truth) as f64)
+                .sum::<f64>()
+                / visible.len() as f64;
+            assert!(iou >= 0.5, "{name} seed {seed}: mean IoU {iou:.2}");
+        }
+    }
+}
+
+#[test]
+fn reports_lost_when_the_target_leaves_and_tracking_when_it_returns() {
+    let fx = load("exit_return");
+    let gone = (0..fx.frames.len())
+        .find(|&i| fx.frames[i].visible_permille == 0)
+        .unwrap();
+    let back = (gone..fx.frames.len())
+        .find(|&i| fx.frames[i].visible_permille >= 500)
+        .unwrap();
+    let lost_after = Config::default().lost_after as usize;
+    for seed in SEEDS {
+        let (est, _) = run(&fx, seed);
+        // Estimates are for frames 1..; frame i is est[i - 1].
+        let lost_at = (1..fx.frames.len())
+            .find(|&i| est[i - 1].event == Some(Event::LostTarget))
+            .unwrap();
+        // Reason: the target is gone at `gone`; the filter needs `lost_after`
+        // consecutive misses, plus one frame of slack for the particles that
+        // still overlap the last visible sliver.
+        assert!(
+            lost_at >= gone - 1 && lost_at <= gone + lost_after,
+            "seed {seed}: lost at {lost_at}, gone at {gone}"
+        );
+        // It stays lost while the target is away: nothing in the background
+        // looks like it. (Re-acquiring on a partial return is fine.)
+        for i in (lost_at..back).filter(|&i| fx.frames[i].visible_permille == 0) {
+            assert_ne!(
+                est[i - 1].state,
+                TrackState::Tracking,
+                "seed {seed}: claims tracking at frame {i}"
+            );
+        }
+        let found = (back - 2..fx.frames.len())
+            .find(|&i| est[i - 1].event == Some(Event::Reacquired))
+            .unwrap();
+        // Reason: once half the target is back in view, the particles waiting
+        // at the border see it within a few frames.
+        assert!(found <= back + 3, "seed {seed}: reacquired at {found}, back at {back}");
+        // And it is really on it a few frames later.
+        let i = (found + 4).min(fx.frames.len() - 1);
+        assert!(
+            on_target(&est[i - 1], &fx.frames[i].truth),
+            "seed {seed}: off target at frame {i}"
+        );
+    }
+}
+
+#[test]
+fn model_is_not_updated_while_the_target_is_hidden() {
+    // Reason: π_E[S] of a hidden target is far below π_T, so the first
+    // paper's gate must keep the model exactly as it was.
+    let fx = load("occlusion");
+    for seed in SEEDS {
+        let (est, models) = run(&fx, seed);
+        let hidden: Vec<usize> = (1..fx.frames.len())
+            .filter(|&i| fx.frames[i].visible_permille == 0)
+            .collect();
+        assert!(hidden.len() >= 3, "the scene hides the target for several frames");
+        for &i in &hidden {
+            assert!(
+                !est[i - 1].model_updated,
+                "seed {seed}: model updated at hidden frame {i}"
+            );
+            assert_eq!(
+                models[i - 1],
+                models[i - 2],
+                "seed {seed}: model changed at hidden frame {i}"
+            );
+        }
+        // ...while it does adapt on clear frames (the gate is not simply shut).
+        assert!(
+            est.iter().take(5).any(|e| e.model_updated),
+            "seed {seed}: never updated on clear frames"
+        );
+        // After the occluder has passed, the tracker is back on the target.
+        let last = fx.frames.len() - 1;
+        assert!(
+            on_target(&est[last - 1], &fx.frames[last].truth),
+            "seed {seed}: lost after occlusion"
+        );
+    }
+}
+
+#[test]
+fn confidence_is_not_high_while_off_target() {
+    // Reason: confidence is ρ at the estimate against the model; a confident
+    // (ρ > 0.8) estimate whose centre is off the target would mean the model
+    // matches background, which these scenes are built to rule out. The
+    // lighting-ramp scene is included: there the tracker may lose the target,
+    // but it must not be confident while doing so.
+    for spec in catalogue() {
+        let fx = load(spec.name);
+        let (est, _) = run(&fx, 1);
+        for (i, e) in est.iter().enumerate() {
+            let f = &fx.frames[i + 1];
+            if e.confidence > 0.8 && f.visible_permille > 0 {
+                assert!(
+                    centre_error(&e.bbox(), &f.truth) < f.truth.width.max(f.truth.height) as f64,
+                    "{}: frame {}: confidence {} off target",
+                    spec.name,
+                    i + 1,
+                    e.confidence
+                );
+            }
+            assert!((0.0..=1.0).contains(&e.confidence));
+        }
+    }
+}
+
+#[test]
+fn searching_acquires_a_target_that_appears() {
+    // The model comes from the first frame; the search starts while the target
+    // is away, and must not fire until it returns (automatic initialisation).
+    let fx = load("exit_return");
+    let fr = frames(&fx);
+    let gone = (0..fx.frames.len())
+        .find(|&i| fx.frames[i].visible_permille == 0)
+        .unwrap();
+    let back = (gone..fx.frames.len())
+        .find(|&i| fx.frames[i].visible_permille >= 500)
+        .unwrap();
+    for seed in SEEDS {
+        let mut t: Box<Tracker<100>> = Box::new(Tracker::new(Config::default(), seed).unwrap());
+        t.search(&fr[0], fx.frames[0].truth).unwrap();
+        assert_eq!(t.state(), TrackState::Searching);
+        let mut acquired = None;
+        for (i, f) in fr.iter().enumerate().skip(gone) {
+            let e = t.step(f).unwrap();
+            if e.event == Some(Event::Acquired) {
+                acquired = Some(i);
+                break;
+            }
+            assert_eq!(e.state, TrackState::Searching, "seed {seed}: frame {i}");
+        }
+        let at = acquired.unwrap_or_else(|| panic!("seed {seed}: never acquired"));
+        // Reason: acquisition needs the target in view (it cannot happen before
+        // it returns) and a few frames for the re-drawn particles to find it.
+        assert!(
+            at + 2 >= back && at <= back + 4,
+            "seed {seed}: acquired at {at}, back at {back}"
+        );
+    }
+}
+
+#[test]
+fn same_seed_same_track_other_seed_other_track() {
+    // Reason: determinism is a promise (the firmware reproduces the host's
+    // track from the seed); a different seed must change something, or the
+    // generator is not actually used.
+    let fx = load("smooth_scale");
+    let (a, _) = run(&fx, 7);
+    let (b, _) = run(&fx, 7);
+    let (c, _) = run(&fx, 8);
+    assert_eq!(a, b);
+    assert_ne!(a, c);
+}
+
+#[test]
+fn reinitialisation_moves_the_tracker_to_a_new_box() {
+    // Reason: init on a new box discards the old hypothesis entirely, so the
+    // next estimate is on the new box even if it is far from the old one.
+    let fx = load("distractor");
+    let fr = frames(&fx);
+    let mut t: Box<Tracker<100>> = Box::new(Tracker::new(Config::default(), 1).unwrap());
+    t.init(&fr[0], fx.frames[0].truth).unwrap();
+    for f in &fr[1..5] {
+        t.step(f).unwrap();
+    }
+    // The decoy at frame 5 (centre (100 - 1.5*5, 58), same size as the target).
+    let decoy = BoundingBox::new(100.0 - 7.5 - 11.0, 58.0 - 13.0, 22.0, 26.0);
+    let e = t.init(&fr[5], decoy).unwrap();
+    assert_eq!(e.event, Some(Event::Initialised));
+    let e = t.step(&fr[6]).unwrap();
+    let moved = BoundingBox::new(decoy.x - 1.5, decoy.y, decoy.width, decoy.height);
+    assert!(centre_error(&e.bbox(), &moved) < 5.0, "{:?}", e.bbox());
+}
+
+#[test]
+fn misuse_gives_typed_errors() {
+    let fx = load("gray_smooth");
+    let fr = frames(&fx);
+    let mut t: Box<Tracker<50>> = Box::new(Tracker::new(Config::default(), 1).unwrap());
+    assert_eq!(t.step(&fr[0]), Err(pftrack::Error::NotInitialised));
+    assert_eq!(
+        t.init(&fr[0], BoundingBox::new(500.0, 0.0, 10.0, 10.0)),
+        Err(pftrack::Error::Region(pftrack::RegionError::OutsideFrame))
+    );
+    t.init(&fr[0], fx.frames[0].truth).unwrap();
+    let small = vec![0u8; 64 * 48];
+    let other = Frame::packed(&small, 64, 48, pftrack::PixelFormat::Gray8).unwrap();
+    assert_eq!(
+        t.step(&other),
+        Err(pftrack::Error::FrameSizeChanged {
+            expected: (128, 96),
+            got: (64, 48)
+        })
+    );
+}
