@@ -2,8 +2,9 @@
 
 use crate::error::{ConfigError, ParamProblem};
 use crate::filter::{Dynamics, Resampling};
-use crate::histogram::{Binning, Sampling};
-use crate::likelihood::{Likelihood, Sigma};
+use crate::colour::Binning;
+use crate::region::Sampling;
+use crate::likelihood::{Combination, Likelihood, Sigma};
 use crate::scalar::Real;
 
 /// Everything that tunes a [`crate::Tracker`]. Start from [`Config::default`]
@@ -24,6 +25,14 @@ pub struct Config {
     pub binning: Binning,
     /// Which pixels of each region are read.
     pub sampling: Sampling,
+    /// Most pixels read per region and cue; larger regions are read on a
+    /// coarser lattice so that the cost per particle stays bounded whatever
+    /// the target's size. 0 means no limit.
+    pub max_samples: u32,
+    /// The edge-orientation cue, or `None` for colour only.
+    pub edges: Option<EdgeCue>,
+    /// How colour and edge distances combine (ignored for colour only).
+    pub combination: Combination,
     /// From Bhattacharyya distance to weight.
     pub likelihood: Likelihood,
     /// Resampling scheme.
@@ -59,6 +68,19 @@ pub struct Config {
     pub min_half_axis: Real,
 }
 
+/// Parameters of the edge-orientation cue.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct EdgeCue {
+    /// Orientation bins over 0–180°: 2, 4, 8 or 16.
+    pub bins: u8,
+    /// Gradients with `sqrt(gx² + gy²)` below this are dropped (Sobel on 8-bit
+    /// grey levels, so strengths range up to about 1440).
+    pub threshold: u16,
+}
+
+/// Capacity of an edge histogram: the most orientation bins an [`EdgeCue`] may ask for.
+pub const MAX_EDGE_BINS: usize = 16;
+
 impl Default for Config {
     /// The defaults: the first paper's filter (RGB 8x8x8, σ = 0.2, α = 0.1,
     /// π_T = 0.15, b = 0.1) with the noise levels of the reference
@@ -67,6 +89,9 @@ impl Default for Config {
         Config {
             binning: Binning::Rgb8x8x8,
             sampling: Sampling::Full,
+            max_samples: 0,
+            edges: None,
+            combination: Combination::Product,
             likelihood: Likelihood {
                 sigma: Sigma::Fixed(0.2),
                 eps: 0.0,
@@ -135,6 +160,17 @@ impl Config {
             }
         }
         check("likelihood.eps", self.likelihood.eps, 0.0, 1.0)?;
+        if let Combination::Weighted { colour } = self.combination {
+            check("combination.colour", colour, 0.0, 1.0)?;
+        }
+        if let Some(e) = self.edges {
+            if !matches!(e.bins, 2 | 4 | 8 | 16) {
+                return Err(ConfigError { field: "edges.bins", problem: ParamProblem::OutOfRange });
+            }
+            if e.threshold > 1500 {
+                return Err(ConfigError { field: "edges.threshold", problem: ParamProblem::OutOfRange });
+            }
+        }
         let d = &self.dynamics;
         check("dynamics.position_noise", d.position_noise, 0.0, 10.0)?;
         check("dynamics.velocity_noise", d.velocity_noise, 0.0, 10.0)?;
@@ -174,7 +210,10 @@ mod tests {
     #[test]
     fn each_bad_field_is_named() {
         type Case = (fn(&mut Config), &'static str, ParamProblem);
-        let cases: [Case; 12] = [
+        let cases: [Case; 15] = [
+            (|c| c.combination = Combination::Weighted { colour: 1.5 }, "combination.colour", ParamProblem::OutOfRange),
+            (|c| c.edges = Some(EdgeCue { bins: 7, threshold: 50 }), "edges.bins", ParamProblem::OutOfRange),
+            (|c| c.edges = Some(EdgeCue { bins: 8, threshold: 9999 }), "edges.threshold", ParamProblem::OutOfRange),
             (
                 |c| c.likelihood.sigma = Sigma::Fixed(0.0),
                 "likelihood.sigma",

@@ -41,22 +41,28 @@
 //! ```
 #![cfg_attr(not(test), no_std)]
 
+pub mod colour;
 pub mod config;
 pub mod error;
+pub mod edges;
 pub mod filter;
 pub mod frame;
 pub mod geometry;
 pub mod histogram;
 pub mod likelihood;
+pub mod region;
 pub mod scalar;
 pub mod tracker;
 
-pub use config::Config;
+pub use config::{Config, EdgeCue};
 pub use error::{ConfigError, Error, FrameError, ParamProblem, RegionError};
 pub use filter::{Dynamics, Particle, Resampling};
 pub use frame::{Frame, PixelFormat};
 pub use geometry::{BoundingBox, Ellipse};
-pub use histogram::{Binning, Histogram, Model, Sampling};
-pub use likelihood::{Likelihood, Sigma};
+pub use colour::Binning;
+pub use edges::EdgeMap;
+pub use histogram::{Histogram, Model};
+pub use region::Sampling;
+pub use likelihood::{Combination, Likelihood, Sigma};
 pub use scalar::Real;
 pub use tracker::{Estimate, Event, TrackState, Tracker};

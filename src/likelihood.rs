@@ -24,7 +24,41 @@ pub enum Sigma {
     },
 }
 
-/// The likelihood model of one cue.
+/// How the colour and edge distances combine into one.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub enum Combination {
+    /// The product of the two cues' likelihoods with a shared σ:
+    /// `exp(−d_c²/2σ²) · exp(−d_e²/2σ²) = exp(−(d_c² + d_e²)/2σ²)`,
+    /// i.e. `d² = d_c² + d_e²`.
+    Product,
+    /// `d² = w · d_c² + (1 − w) · d_e²` with `w` the colour weight in `[0, 1]`.
+    Weighted {
+        /// Weight of the colour cue.
+        colour: Real,
+    },
+}
+
+impl Combination {
+    /// The combined similarity in `[0, 1]` of a colour and an edge
+    /// Bhattacharyya coefficient: `1 − d² / d²_max`, so 1 is a perfect match
+    /// on both cues. The likelihood's `d²` is `d²_max · (1 − similarity)`.
+    pub fn similarity(&self, rho_colour: Real, rho_edge: Real) -> Real {
+        match *self {
+            Combination::Product => 0.5 * (rho_colour + rho_edge),
+            Combination::Weighted { colour } => colour * rho_colour + (1.0 - colour) * rho_edge,
+        }
+    }
+
+    /// The largest `d²` the combination can produce.
+    pub fn d2_max(&self) -> Real {
+        match self {
+            Combination::Product => 2.0,
+            Combination::Weighted { .. } => 1.0,
+        }
+    }
+}
+
+/// The likelihood model.
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct Likelihood {
     /// How σ is chosen.
@@ -72,6 +106,20 @@ mod tests {
         // Bounds hold at both ends.
         assert_eq!(l.sigma_for(0.0), 0.01);
         assert_eq!(l.sigma_for(4.0), 1.0);
+    }
+
+    #[test]
+    fn combinations_by_hand() {
+        // Reason: product adds squared distances (0.2 + 0.4 = 0.6 of at most
+        // 2, similarity 0.7); weighted 0.25/0.75 gives 0.05 + 0.3 = 0.35.
+        let p = Combination::Product;
+        let s = p.similarity(0.8, 0.6);
+        assert!((p.d2_max() * (1.0 - s) - 0.6).abs() < 1e-6);
+        let w = Combination::Weighted { colour: 0.25 };
+        let s = w.similarity(0.8, 0.6);
+        assert!((w.d2_max() * (1.0 - s) - 0.35).abs() < 1e-6);
+        assert_eq!(p.similarity(1.0, 1.0), 1.0);
+        assert_eq!(w.similarity(0.0, 0.0), 0.0);
     }
 
     #[test]

@@ -1,13 +1,15 @@
 //! The tracker: a particle filter over colour histograms with an adaptive
 //! model and explicit searching / tracking / lost states.
 
-use crate::config::Config;
+use crate::config::{Config, MAX_EDGE_BINS};
+use crate::edges::EdgeMap;
 use crate::error::{ConfigError, Error, ParamProblem, RegionError};
 use crate::filter::{Bounds, Particle, mean_state, resample};
 use crate::frame::Frame;
 use crate::geometry::{BoundingBox, Ellipse};
 use crate::histogram::{Histogram, Model};
 use crate::likelihood::gaussian;
+use crate::region::Lattice;
 use crate::scalar::{Real, sqrt, unit_from_bits};
 use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro128PlusPlus;
@@ -41,14 +43,17 @@ pub enum Event {
 pub struct Estimate {
     /// The mean state's ellipse.
     pub ellipse: Ellipse,
-    /// The Bhattacharyya coefficient `ρ` between the target model and the
-    /// histogram at the mean state, in `[0, 1]`: 1 is a perfect match.
+    /// The similarity between the target model and the mean state, in
+    /// `[0, 1]`: the Bhattacharyya coefficient `ρ` for colour alone, or the
+    /// combined similarity of colour and edges (see
+    /// [`crate::Combination::similarity`]). 1 is a perfect match.
     pub confidence: Real,
     /// The state after this step.
     pub state: TrackState,
     /// The transition that happened in this step, if any.
     pub event: Option<Event>,
-    /// How many particles satisfied the appearance condition `ρ > μ + kσ`.
+    /// How many particles satisfied the appearance condition: similarity
+    /// above the background's `μ + kσ` (and the floor).
     pub appearing: u16,
     /// Whether the target model was updated in this step.
     pub model_updated: bool,
@@ -63,23 +68,91 @@ impl Estimate {
     }
 }
 
+/// The learnt appearance of the target.
+#[derive(Clone, Debug)]
+struct Models<const K: usize> {
+    colour: Model<K>,
+    /// `None` when the edge cue is off, or the target has no edge above the
+    /// threshold (a flat target: its edge histogram says nothing).
+    edge: Option<Model<MAX_EDGE_BINS>>,
+}
+
+impl<const K: usize> Models<K> {
+    /// The largest squared distance the active cues can produce.
+    fn d2_max(&self, cfg: &Config) -> Real {
+        if self.edge.is_some() { cfg.combination.d2_max() } else { 1.0 }
+    }
+}
+
 /// What the tracker learnt when it was initialised.
 #[derive(Clone, Debug)]
 struct Target<const K: usize> {
-    model: Model<K>,
+    models: Models<K>,
     /// Frame size the tracker was initialised on.
     frame: (usize, usize),
-    /// `μ + kσ` of the background's ρ: the appearance threshold.
+    /// The appearance threshold on the similarity.
     threshold: Real,
     /// Half axes to give particles re-drawn while searching.
     half_axes: (Real, Real),
 }
 
-/// A colour particle-filter tracker with `N` particles and histograms of up
-/// to `K` bins, drawing randomness from `R`.
+/// Working memory for observing regions: the histograms of the last region
+/// observed, and this frame's edge map.
+#[derive(Clone, Debug)]
+struct Scratch<const K: usize, const E: usize> {
+    colour: Histogram<K>,
+    edge: Histogram<MAX_EDGE_BINS>,
+    map: EdgeMap<E>,
+}
+
+impl<const K: usize, const E: usize> Scratch<K, E> {
+    /// Histograms of ellipse `e`, left in `self` (for a model update).
+    fn observe(&mut self, cfg: &Config, frame: &Frame<'_>, e: &Ellipse, edges: bool) {
+        let lattice = Lattice::new(cfg.sampling, cfg.max_samples, e.hx, e.hy);
+        self.colour.compute_on(frame, e, cfg.binning, lattice);
+        if edges {
+            self.map.histogram(frame, e, lattice, &mut self.edge);
+        }
+    }
+
+    /// The similarity of ellipse `e` to `models`, in `[0, 1]`.
+    fn similarity(&mut self, cfg: &Config, frame: &Frame<'_>, models: &Models<K>, e: &Ellipse) -> Real {
+        self.observe(cfg, frame, e, models.edge.is_some());
+        let rho = models.colour.bhattacharyya(&self.colour);
+        match &models.edge {
+            Some(m) => cfg.combination.similarity(rho, m.bhattacharyya(&self.edge)),
+            None => rho,
+        }
+    }
+
+    /// Computes the edge map over the pixel rectangle `[x0, x1) × [y0, y1)`.
+    fn map_edges(&mut self, cfg: &Config, frame: &Frame<'_>, rect: (usize, usize, usize, usize)) {
+        if let Some(e) = cfg.edges {
+            self.map.compute(frame, rect, e.bins as usize, e.threshold);
+        }
+    }
+}
+
+/// The pixel rectangle covering ellipse `e` with a one-pixel margin (for the
+/// Sobel window), clipped to a `w × h` frame.
+fn cover(e: &Ellipse, w: usize, h: usize) -> (usize, usize, usize, usize) {
+    let clip = |v: Real, hi: usize| -> usize { v.clamp(0.0, hi as Real) as usize };
+    (
+        clip(e.cx - e.hx - 1.0, w),
+        clip(e.cy - e.hy - 1.0, h),
+        clip(e.cx + e.hx + 2.0, w),
+        clip(e.cy + e.hy + 2.0, h),
+    )
+}
+
+/// A colour particle-filter tracker with `N` particles, colour histograms of
+/// up to `K` bins and an edge map of `E` cells, drawing randomness from `R`.
 ///
-/// Everything is stored inline: a `Tracker<100>` is about 10 KiB and never
-/// allocates. Place it in a `static` (e.g. with `static_cell`) on small stacks.
+/// Everything is stored inline and nothing allocates; `core::mem::size_of`
+/// gives the RAM it needs. Place it in a `static` (e.g. with `static_cell`)
+/// on small stacks. `E` bounds the per-frame edge map: when the particles
+/// cover more pixels than that, edges are computed on a coarser grid (see
+/// [`EdgeMap`]). It costs nothing when the edge cue is off.
 ///
 /// ```
 /// use pftrack::{BoundingBox, Config, Frame, PixelFormat, TrackState, Tracker};
@@ -107,20 +180,21 @@ struct Target<const K: usize> {
 /// # Ok::<(), pftrack::Error>(())
 /// ```
 #[derive(Clone, Debug)]
-pub struct Tracker<const N: usize, const K: usize = 512, R = Xoshiro128PlusPlus> {
+pub struct Tracker<const N: usize, const K: usize = 512, const E: usize = 4096, R = Xoshiro128PlusPlus> {
     config: Config,
     rng: R,
     particles: [Particle; N],
-    scratch: [Particle; N],
+    /// Where resampling writes before the set is swapped in.
+    resampled: [Particle; N],
     /// Normalised weights of `particles` after a step.
     weights: [Real; N],
-    histogram: Histogram<K>,
+    scratch: Scratch<K, E>,
     target: Option<Target<K>>,
     state: TrackState,
     misses: u16,
 }
 
-impl<const N: usize, const K: usize> Tracker<N, K, Xoshiro128PlusPlus> {
+impl<const N: usize, const K: usize, const E: usize> Tracker<N, K, E, Xoshiro128PlusPlus> {
     /// A tracker with the default generator, xoshiro128++ seeded from `seed`:
     /// the same seed and frames give the same estimates, bit for bit, on every target.
     pub fn new(config: Config, seed: u64) -> Result<Self, Error> {
@@ -128,7 +202,7 @@ impl<const N: usize, const K: usize> Tracker<N, K, Xoshiro128PlusPlus> {
     }
 }
 
-impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
+impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R> {
     /// A tracker drawing its randomness from `rng`.
     pub fn with_rng(config: Config, rng: R) -> Result<Self, Error> {
         const {
@@ -147,9 +221,9 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
             config,
             rng,
             particles: [Particle::default(); N],
-            scratch: [Particle::default(); N],
+            resampled: [Particle::default(); N],
             weights: [1.0 / N as Real; N],
-            histogram: Histogram::new(),
+            scratch: Scratch { colour: Histogram::new(), edge: Histogram::new(), map: EdgeMap::new() },
             target: None,
             state: TrackState::Searching,
             misses: 0,
@@ -176,12 +250,18 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
         &self.weights
     }
 
-    /// The target model, once initialised.
+    /// The colour model, once initialised.
     pub fn model(&self) -> Option<&Model<K>> {
-        self.target.as_ref().map(|t| &t.model)
+        self.target.as_ref().map(|t| &t.models.colour)
     }
 
-    /// The appearance threshold `μ + kσ` learnt from the background, once initialised.
+    /// The edge-orientation model, once initialised with the edge cue on and
+    /// a target that has edges.
+    pub fn edge_model(&self) -> Option<&Model<MAX_EDGE_BINS>> {
+        self.target.as_ref().and_then(|t| t.models.edge.as_ref())
+    }
+
+    /// The appearance threshold learnt from the background, once initialised.
     pub fn appearance_threshold(&self) -> Option<Real> {
         self.target.as_ref().map(|t| t.threshold)
     }
@@ -228,17 +308,24 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
         Ok(())
     }
 
-    /// The model of `bbox` and the background statistics of `frame`.
+    /// The models of `bbox` and the background statistics of `frame`.
     fn learn(&mut self, frame: &Frame<'_>, bbox: &BoundingBox) -> Result<Target<K>, Error> {
         bbox.validate(frame.width(), frame.height())?;
+        let cfg = &self.config;
+        let (fw, fh) = (frame.width(), frame.height());
         let e = Ellipse::from_box(bbox);
-        let (binning, sampling) = (self.config.binning, self.config.sampling);
-        self.histogram.compute(frame, &e, binning, sampling);
-        let model = Model::from_histogram(&self.histogram).ok_or(RegionError::NoPixels)?;
+        let sc = &mut self.scratch;
+        sc.map_edges(cfg, frame, cover(&e, fw, fh));
+        sc.observe(cfg, frame, &e, cfg.edges.is_some());
+        let colour = Model::from_histogram(&sc.colour).ok_or(RegionError::NoPixels)?;
+        let edge = if cfg.edges.is_some() { Model::from_histogram(&sc.edge) } else { None };
+        let models = Models { colour, edge };
 
-        // Background ρ on a grid of target-sized regions that do not touch the
-        // target: at most 8x8 of them, spaced at least one target size apart.
-        let (fw, fh) = (frame.width() as Real, frame.height() as Real);
+        // Background similarity on a grid of target-sized regions that do not
+        // touch the target: at most 8x8 of them, spaced at least one target
+        // size apart.
+        sc.map_edges(cfg, frame, (0, 0, fw, fh));
+        let (fw, fh) = (fw as Real, fh as Real);
         let step_x = bbox.width.max(fw / 8.0);
         let step_y = bbox.height.max(fh / 8.0);
         let (mut n, mut s1, mut s2) = (0u32, 0.0 as Real, 0.0 as Real);
@@ -248,12 +335,10 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
             while x + bbox.width <= fw {
                 let cand = BoundingBox::new(x, y, bbox.width, bbox.height);
                 if cand.iou(bbox) == 0.0 {
-                    self.histogram
-                        .compute(frame, &Ellipse::from_box(&cand), binning, sampling);
-                    let rho = model.bhattacharyya(&self.histogram);
+                    let sim = sc.similarity(cfg, frame, &models, &Ellipse::from_box(&cand));
                     n += 1;
-                    s1 += rho;
-                    s2 += rho * rho;
+                    s1 += sim;
+                    s2 += sim * sim;
                 }
                 x += step_x;
             }
@@ -264,17 +349,15 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
         let threshold = if n >= 2 {
             let mean = s1 / n as Real;
             let var = (s2 / n as Real - mean * mean).max(0.0);
-            (mean + self.config.appearance_sigmas * sqrt(var))
-                .max(self.config.min_appearance)
-                .min(1.0)
+            (mean + cfg.appearance_sigmas * sqrt(var)).max(cfg.min_appearance).min(1.0)
         } else {
-            self.config.min_appearance
+            cfg.min_appearance
         };
         Ok(Target {
-            model,
+            models,
             frame: (frame.width(), frame.height()),
             threshold,
-            half_axes: (e.hx.max(self.config.min_half_axis), e.hy.max(self.config.min_half_axis)),
+            half_axes: (e.hx.max(cfg.min_half_axis), e.hy.max(cfg.min_half_axis)),
         })
     }
 
@@ -305,11 +388,11 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
         resample(
             &self.particles,
             &mut self.weights,
-            &mut self.scratch,
+            &mut self.resampled,
             cfg.resampling,
             &mut self.rng,
         );
-        self.particles = self.scratch;
+        self.particles = self.resampled;
         for p in self.particles.iter_mut() {
             cfg.dynamics.propagate(p, &bounds, &mut self.rng);
         }
@@ -325,22 +408,31 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
             }
         }
 
-        // 3. Observe: ρ per particle, kept in `weights` until σ is known.
+        // 3. Observe. Edges first, once, over the region the particles cover.
+        if target.models.edge.is_some() {
+            let (mut x0, mut y0, mut x1, mut y1) = (size.0, size.1, 0, 0);
+            for p in self.particles.iter() {
+                let (a, b, c, d) = cover(&p.ellipse(), size.0, size.1);
+                (x0, y0, x1, y1) = (x0.min(a), y0.min(b), x1.max(c), y1.max(d));
+            }
+            self.scratch.map_edges(cfg, frame, (x0, y0, x1, y1));
+        }
+        // Similarity per particle, kept in `weights` until σ is known.
         let mut appearing = 0u16;
-        let mut rho_max: Real = 0.0;
+        let mut best: Real = 0.0;
         for (p, w) in self.particles.iter().zip(self.weights.iter_mut()) {
-            self.histogram.compute(frame, &p.ellipse(), cfg.binning, cfg.sampling);
-            let rho = target.model.bhattacharyya(&self.histogram);
-            if rho > target.threshold {
+            let sim = self.scratch.similarity(cfg, frame, &target.models, &p.ellipse());
+            if sim > target.threshold {
                 appearing += 1;
             }
-            rho_max = rho_max.max(rho);
-            *w = rho;
+            best = best.max(sim);
+            *w = sim;
         }
-        let sigma = cfg.likelihood.sigma_for(1.0 - rho_max);
+        let d2_max = target.models.d2_max(cfg);
+        let sigma = cfg.likelihood.sigma_for(d2_max * (1.0 - best));
         let mut sum = 0.0;
         for w in self.weights.iter_mut() {
-            *w = cfg.likelihood.weight(1.0 - *w, sigma);
+            *w = cfg.likelihood.weight(d2_max * (1.0 - *w), sigma);
             sum += *w;
         }
         if sum > 0.0 && sum.is_finite() {
@@ -354,8 +446,7 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
         // 4. Estimate the mean state and look at it.
         let mean = mean_state(&self.particles, &self.weights);
         let ellipse = mean.ellipse();
-        self.histogram.compute(frame, &ellipse, cfg.binning, cfg.sampling);
-        let confidence = target.model.bhattacharyya(&self.histogram);
+        let confidence = self.scratch.similarity(cfg, frame, &target.models, &ellipse);
 
         // 5. The appearance test drives the state machine.
         let seen = appearing as Real > cfg.kickoff * N as Real;
@@ -385,14 +476,18 @@ impl<const N: usize, const K: usize, R: Rng> Tracker<N, K, R> {
         }
 
         // 6. Adapt the model, only on confident tracking frames.
-        let pi_e = gaussian(1.0 - confidence, sigma);
+        let pi_e = gaussian(d2_max * (1.0 - confidence), sigma);
         let model_updated = self.state == TrackState::Tracking
             && event.is_none()
             && self.misses == 0
             && pi_e > cfg.update_threshold
             && cfg.alpha > 0.0;
         if model_updated {
-            target.model.blend(&self.histogram, cfg.alpha);
+            // The scratch still holds the mean state's histograms.
+            target.models.colour.blend(&self.scratch.colour, cfg.alpha);
+            if let Some(m) = target.models.edge.as_mut() {
+                m.blend(&self.scratch.edge, cfg.alpha);
+            }
         }
         if self.state == TrackState::Tracking {
             target.half_axes = (ellipse.hx, ellipse.hy);

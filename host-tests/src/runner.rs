@@ -6,8 +6,13 @@ use std::time::Instant;
 /// Particle count of the host harness (the papers' 100).
 pub const PARTICLES: usize = 100;
 
+/// Edge-map cells of the harness's tracker: enough for the particles of a
+/// 100x130-pixel target at full resolution (firmware uses fewer and gets a
+/// coarser map on large targets; see `pftrack::EdgeMap`).
+pub const EDGE_CELLS: usize = 16384;
+
 /// The tracker type the harness uses.
-pub type HostTracker = Tracker<PARTICLES>;
+pub type HostTracker = Tracker<PARTICLES, 512, EDGE_CELLS>;
 
 /// What a run produced.
 #[derive(Debug, Clone)]

@@ -2,13 +2,16 @@
 //! and ablation runs. Every key names a [`pftrack::Config`] field; values are
 //! validated by the core afterwards, so this only parses.
 
-use pftrack::{Binning, Config, Resampling, Sampling, Sigma};
+use pftrack::{Binning, Combination, Config, EdgeCue, Resampling, Sampling, Sigma};
 
 /// The keys `apply` understands, with what they set.
 pub const KEYS: &[(&str, &str)] = &[
     ("sampling", "full | checkerboard | quarter"),
     ("resampling", "multinomial | systematic"),
-    ("binning", "rgb8x8x8"),
+    ("binning", "rgb8x8x8 | hsv8x8x4"),
+    ("max_samples", "most pixels read per region and cue, 0 = all"),
+    ("edges", "off | BINS:THRESHOLD, e.g. 8:50"),
+    ("combination", "product | weighted:W (W = colour weight)"),
     ("sigma", "fixed σ, e.g. 0.2"),
     ("adaptive_sigma", "MIN:MAX, e.g. 0.02:0.5 (σ chosen per frame)"),
     ("eps", "likelihood floor ε"),
@@ -55,7 +58,29 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
         "binning" => {
             c.binning = match v {
                 "rgb8x8x8" => Binning::Rgb8x8x8,
-                _ => return Err(format!("binning: `{v}` is not rgb8x8x8")),
+                "hsv8x8x4" => Binning::Hsv8x8x4,
+                _ => return Err(format!("binning: `{v}` is not rgb8x8x8 or hsv8x8x4")),
+            }
+        }
+        "max_samples" => c.max_samples = v.parse().map_err(|_| format!("max_samples: `{v}` is not a whole number"))?,
+        "edges" => {
+            c.edges = if v == "off" {
+                None
+            } else {
+                let (b, t) = v.split_once(':').ok_or_else(|| format!("edges: `{v}` is not off or BINS:THRESHOLD"))?;
+                Some(EdgeCue {
+                    bins: b.parse().map_err(|_| format!("edges: `{b}` is not a bin count"))?,
+                    threshold: t.parse().map_err(|_| format!("edges: `{t}` is not a threshold"))?,
+                })
+            }
+        }
+        "combination" => {
+            c.combination = if v == "product" {
+                Combination::Product
+            } else if let Some(w) = v.strip_prefix("weighted:") {
+                Combination::Weighted { colour: num(key, w)? }
+            } else {
+                return Err(format!("combination: `{v}` is not product or weighted:W"));
             }
         }
         "sigma" => c.likelihood.sigma = Sigma::Fixed(num(key, v)?),
@@ -104,17 +129,17 @@ mod tests {
             let v = match *k {
                 "sampling" => "quarter",
                 "resampling" => "multinomial",
-                "binning" => "rgb8x8x8",
+                "binning" => "hsv8x8x4",
+                "max_samples" => "300",
+                "edges" => "4:60",
+                "combination" => "weighted:0.3",
                 "adaptive_sigma" => "0.1:0.3",
                 "lost_after" => "4",
                 _ => "0.07",
             };
             let mut c = Config::default();
             apply(&mut c, &format!("{k}={v}")).unwrap();
-            // Binning has a single choice so far: setting it cannot change anything.
-            if *k != "binning" {
-                assert_ne!(c, Config::default(), "{k} changed nothing");
-            }
+            assert_ne!(c, Config::default(), "{k} changed nothing");
         }
         assert!(apply(&mut Config::default(), "nope=1").is_err());
         assert!(apply(&mut Config::default(), "sigma").is_err());

@@ -1,0 +1,285 @@
+//! The edge cue: Sobel gradients on grey levels, quantised orientation, and
+//! edge-orientation histograms inside the same kernel-weighted ellipses as
+//! colour (the third paper).
+//!
+//! Gradients are computed once per frame into an [`EdgeMap`], and only over
+//! the region the particles cover; each particle's histogram then only looks
+//! orientations up. The map lives in a fixed buffer of `E` cells owned by the
+//! tracker. When the region has more pixels than that, the map is computed on
+//! a coarser grid (every 2nd, 4th, … pixel in each direction) and particles
+//! read the nearest grid cell: the same trade the subsampled colour
+//! histograms make, with no allocation and a bounded cost.
+
+use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
+use crate::histogram::Histogram;
+use crate::geometry::Ellipse;
+use crate::region::{Lattice, for_each_in_ellipse};
+
+/// Directions at `k · 11.25°` for `k = 0..16`, as `(cos, sin) · 4096`: the
+/// orientation bin boundaries for 2, 4, 8 or 16 bins over 0–180°.
+const DIRECTIONS: [(i32, i32); 16] = [
+    (4096, 0),
+    (4017, 799),
+    (3784, 1567),
+    (3406, 2276),
+    (2896, 2896),
+    (2276, 3406),
+    (1567, 3784),
+    (799, 4017),
+    (0, 4096),
+    (-799, 4017),
+    (-1567, 3784),
+    (-2276, 3406),
+    (-2896, 2896),
+    (-3406, 2276),
+    (-3784, 1567),
+    (-4017, 799),
+];
+
+/// Map cell value of a pixel whose gradient is below the threshold (or that
+/// lies on the frame border, where the 3x3 Sobel window does not fit).
+const WEAK: u8 = u8::MAX;
+
+/// The orientation bin of gradient `(gx, gy)` among `bins` equal sectors of
+/// 0–180°, by sector tests with integer cross products (no `atan`).
+/// `bins` must be 2, 4, 8 or 16.
+pub fn orientation_bin(gx: i32, gy: i32, bins: usize) -> usize {
+    // Orientation is modulo 180°: fold into the upper half plane.
+    let (gx, gy) = if gy < 0 || (gy == 0 && gx < 0) { (-gx, -gy) } else { (gx, gy) };
+    let stride = 16 / bins.clamp(2, 16);
+    // Bin = the number of boundaries at or clockwise of the gradient; the
+    // boundaries are sorted by angle, so binary search.
+    let (mut lo, mut hi) = (0usize, bins);
+    while hi - lo > 1 {
+        let mid = (lo + hi) / 2;
+        let (c, s) = DIRECTIONS.get(mid * stride).copied().unwrap_or((0, 0));
+        // cross(boundary, g) >= 0  <=>  g is at or past the boundary.
+        if c * gy - s * gx >= 0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    lo
+}
+
+/// A per-frame map of quantised edge orientations over a region of the
+/// frame, in a fixed buffer of `E` cells.
+#[derive(Clone, Debug)]
+pub struct EdgeMap<const E: usize> {
+    cells: [u8; E],
+    x0: usize,
+    y0: usize,
+    cols: usize,
+    rows: usize,
+    /// Grid spacing is `1 << shift` pixels.
+    shift: u32,
+}
+
+impl<const E: usize> Default for EdgeMap<E> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const E: usize> EdgeMap<E> {
+    /// An empty map (every lookup is weak).
+    pub const fn new() -> Self {
+        EdgeMap { cells: [WEAK; E], x0: 0, y0: 0, cols: 0, rows: 0, shift: 0 }
+    }
+
+    /// Grid spacing in pixels: 1 when the region fits the buffer at full resolution.
+    pub fn spacing(&self) -> usize {
+        1 << self.shift
+    }
+
+    /// Computes orientations over the pixel rectangle `[x0, x1) × [y0, y1)`
+    /// (clipped to the frame), dropping gradients with
+    /// `sqrt(gx² + gy²) < threshold`.
+    pub fn compute(
+        &mut self,
+        frame: &Frame<'_>,
+        (x0, y0, x1, y1): (usize, usize, usize, usize),
+        bins: usize,
+        threshold: u16,
+    ) {
+        match frame.format() {
+            PixelFormat::Rgb565 => self.compute_as::<Rgb565>(frame, (x0, y0, x1, y1), bins, threshold),
+            PixelFormat::Rgb888 => self.compute_as::<Rgb888>(frame, (x0, y0, x1, y1), bins, threshold),
+            PixelFormat::Yuv422 => self.compute_as::<Yuv422>(frame, (x0, y0, x1, y1), bins, threshold),
+            PixelFormat::Gray8 => self.compute_as::<Gray8>(frame, (x0, y0, x1, y1), bins, threshold),
+        }
+    }
+
+    fn compute_as<P: PixelRead>(
+        &mut self,
+        frame: &Frame<'_>,
+        (x0, y0, x1, y1): (usize, usize, usize, usize),
+        bins: usize,
+        threshold: u16,
+    ) {
+        let (w, h) = (frame.width(), frame.height());
+        let (x0, y0) = (x0.min(w), y0.min(h));
+        let (x1, y1) = (x1.clamp(x0, w), y1.clamp(y0, h));
+        // Coarsen the grid until the region fits.
+        let mut shift = 0;
+        while shift < 12 && ((x1 - x0) >> shift).max(1) * ((y1 - y0) >> shift).max(1) > E {
+            shift += 1;
+        }
+        let d = 1usize << shift;
+        let cols = (x1 - x0).div_ceil(d).min(E);
+        let rows = (y1 - y0).div_ceil(d);
+        let rows = if cols == 0 { 0 } else { rows.min(E / cols) };
+        *self = EdgeMap { cells: self.cells, x0, y0, cols, rows, shift };
+        let t2 = threshold as i32 * threshold as i32;
+        let gray = |x: usize, y: usize| -> i32 {
+            frame.row(y).and_then(|r| P::rgb(r, x)).map_or(0, |[r, g, b]| luma(r, g, b))
+        };
+        for j in 0..rows {
+            let y = y0 + j * d;
+            for i in 0..cols {
+                let x = x0 + i * d;
+                let v = if x == 0 || y == 0 || x + 1 >= w || y + 1 >= h {
+                    WEAK
+                } else {
+                    let (a, b, c) = (gray(x - 1, y - 1), gray(x, y - 1), gray(x + 1, y - 1));
+                    let (dd, f) = (gray(x - 1, y), gray(x + 1, y));
+                    let (g, hh, k) = (gray(x - 1, y + 1), gray(x, y + 1), gray(x + 1, y + 1));
+                    let (gx, gy) = sobel([a, b, c, dd, 0, f, g, hh, k]);
+                    if gx * gx + gy * gy < t2 { WEAK } else { orientation_bin(gx, gy, bins) as u8 }
+                };
+                if let Some(cell) = self.cells.get_mut(j * cols + i) {
+                    *cell = v;
+                }
+            }
+        }
+    }
+
+    /// The orientation bin of the map cell nearest pixel `(x, y)`, or `None`
+    /// for a weak edge or a pixel outside the mapped region.
+    #[inline(always)]
+    pub fn bin_at(&self, x: usize, y: usize) -> Option<usize> {
+        let i = x.checked_sub(self.x0)? >> self.shift;
+        let j = y.checked_sub(self.y0)? >> self.shift;
+        if i >= self.cols || j >= self.rows {
+            return None;
+        }
+        match self.cells.get(j * self.cols + i) {
+            Some(&v) if v != WEAK => Some(v as usize),
+            _ => None,
+        }
+    }
+
+    /// Replaces `hist` with the edge-orientation histogram of ellipse `e`,
+    /// with the same kernel weights and lattice as the colour histogram.
+    pub(crate) fn histogram<const B: usize>(&self, frame: &Frame<'_>, e: &Ellipse, lattice: Lattice, hist: &mut Histogram<B>) {
+        hist.clear();
+        for_each_in_ellipse(frame, e, lattice, |_, x, y, w| {
+            if let Some(bin) = self.bin_at(x, y) {
+                hist.add(bin, w);
+            }
+        });
+    }
+}
+
+/// BT.601 luma from 8-bit RGB, in 8-bit fixed point.
+#[inline(always)]
+fn luma(r: u8, g: u8, b: u8) -> i32 {
+    (77 * r as i32 + 150 * g as i32 + 29 * b as i32) >> 8
+}
+
+/// Sobel gradients of a 3x3 window given row by row (the centre is unused).
+/// `gx` is positive where brightness grows to the right, `gy` downwards.
+pub fn sobel(p: [i32; 9]) -> (i32, i32) {
+    let [a, b, c, d, _, f, g, h, k] = p;
+    let gx = (c + 2 * f + k) - (a + 2 * d + g);
+    let gy = (g + 2 * h + k) - (a + 2 * b + c);
+    (gx, gy)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::region::Sampling;
+
+    #[test]
+    fn sobel_on_a_hand_computed_patch() {
+        // Reason: by hand, for the patch
+        //   10 20 30
+        //   10 20 30
+        //   10 20 60
+        // gx = (30 + 2·30 + 60) − (10 + 2·10 + 10) = 150 − 40 = 110
+        // gy = (10 + 2·20 + 60) − (10 + 2·20 + 30) = 110 − 80 = 30
+        assert_eq!(sobel([10, 20, 30, 10, 20, 30, 10, 20, 60]), (110, 30));
+        // A flat patch has no gradient.
+        assert_eq!(sobel([7; 9]), (0, 0));
+    }
+
+    #[test]
+    fn orientation_bins_of_known_angles() {
+        // Reason: with 8 bins of 22.5°, an edge at angle θ belongs to bin
+        // floor((θ mod 180) / 22.5); test the middle of every bin, and the
+        // opposite direction (θ + 180°), which is the same orientation.
+        for bins in [2usize, 4, 8, 16] {
+            let width = 180.0 / bins as f64;
+            for k in 0..bins {
+                let theta = (k as f64 + 0.5) * width;
+                let (gx, gy) = ((1000.0 * theta.to_radians().cos()) as i32, (1000.0 * theta.to_radians().sin()) as i32);
+                assert_eq!(orientation_bin(gx, gy, bins), k, "{bins} bins, {theta}°");
+                assert_eq!(orientation_bin(-gx, -gy, bins), k, "{bins} bins, {theta}° + 180°");
+            }
+        }
+        // Horizontal gradients (vertical edges) are bin 0 either way.
+        assert_eq!(orientation_bin(50, 0, 8), 0);
+        assert_eq!(orientation_bin(-50, 0, 8), 0);
+        // Vertical gradients are the first bin past 90°.
+        assert_eq!(orientation_bin(0, 50, 8), 4);
+    }
+
+    fn stripes(w: usize, h: usize, vertical: bool) -> Vec<u8> {
+        (0..w * h)
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                let u = if vertical { x } else { y };
+                if (u / 4) % 2 == 0 { 30 } else { 220 }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn synthetic_edges_land_in_their_orientation_bins() {
+        // Reason: vertical stripes have horizontal gradients (bin 0);
+        // horizontal stripes have vertical gradients (bin 4 of 8).
+        for (vertical, want) in [(true, 0usize), (false, 4)] {
+            let px = stripes(40, 40, vertical);
+            let f = Frame::packed(&px, 40, 40, PixelFormat::Gray8).unwrap();
+            let mut map = EdgeMap::<2048>::new();
+            map.compute(&f, (0, 0, 40, 40), 8, 50);
+            assert_eq!(map.spacing(), 1);
+            let mut h = Histogram::<16>::new();
+            let l = Lattice::new(Sampling::Full, 0, 10.0, 10.0);
+            map.histogram(&f, &Ellipse { cx: 20.0, cy: 20.0, hx: 10.0, hy: 10.0 }, l, &mut h);
+            assert!(h.total() > 0);
+            assert_eq!(h.counts()[want], h.total(), "vertical={vertical}: {:?}", &h.counts()[..8]);
+        }
+    }
+
+    #[test]
+    fn weak_gradients_are_dropped_and_the_map_coarsens_to_fit() {
+        let flat = vec![100u8; 64 * 64];
+        let f = Frame::packed(&flat, 64, 64, PixelFormat::Gray8).unwrap();
+        let mut map = EdgeMap::<256>::new();
+        // 64x64 = 4096 pixels into 256 cells: spacing 4.
+        map.compute(&f, (0, 0, 64, 64), 8, 1);
+        assert_eq!(map.spacing(), 4);
+        assert_eq!(map.bin_at(30, 30), None, "a flat frame has no edges");
+        assert_eq!(map.bin_at(100, 30), None, "outside the frame");
+        // Stripes 2 grey levels apart: a gradient of 8, under a threshold of 10.
+        let faint: Vec<u8> = (0..64 * 64).map(|i| if (i % 64) / 4 % 2 == 0 { 100 } else { 102 }).collect();
+        let f = Frame::packed(&faint, 64, 64, PixelFormat::Gray8).unwrap();
+        map.compute(&f, (0, 0, 64, 64), 8, 10);
+        assert!((0..64).all(|x| map.bin_at(x, 30).is_none()));
+        map.compute(&f, (0, 0, 64, 64), 8, 5);
+        assert!((0..64).any(|x| map.bin_at(x, 30).is_some()));
+    }
+}
