@@ -63,6 +63,17 @@ pub fn orientation_bin(gx: i32, gy: i32, bins: usize) -> usize {
     lo
 }
 
+/// How an [`EdgeMap`] is computed.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub struct EdgeParams {
+    /// Orientation bins over 0–180°: 2, 4, 8 or 16.
+    pub bins: usize,
+    /// Gradient strength below which a pixel is weak.
+    pub threshold: u16,
+    /// The finest grid spacing worth computing, in pixels.
+    pub min_spacing: usize,
+}
+
 /// A per-frame map of quantised edge orientations over a region of the
 /// frame, in a fixed buffer of `E` cells.
 #[derive(Clone, Debug)]
@@ -95,34 +106,29 @@ impl<const E: usize> EdgeMap<E> {
 
     /// Computes orientations over the pixel rectangle `[x0, x1) × [y0, y1)`
     /// (clipped to the frame), dropping gradients with
-    /// `sqrt(gx² + gy²) < threshold`.
-    pub fn compute(
-        &mut self,
-        frame: &Frame<'_>,
-        (x0, y0, x1, y1): (usize, usize, usize, usize),
-        bins: usize,
-        threshold: u16,
-    ) {
+    /// `sqrt(gx² + gy²) < threshold`. The grid spacing is the largest power
+    /// of two not above `min_spacing` (a histogram that reads every 4th pixel
+    /// needs no finer map), or coarser if the region does not fit `E` cells.
+    pub fn compute(&mut self, frame: &Frame<'_>, rect: (usize, usize, usize, usize), params: EdgeParams) {
         match frame.format() {
-            PixelFormat::Rgb565 => self.compute_as::<Rgb565>(frame, (x0, y0, x1, y1), bins, threshold),
-            PixelFormat::Rgb888 => self.compute_as::<Rgb888>(frame, (x0, y0, x1, y1), bins, threshold),
-            PixelFormat::Yuv422 => self.compute_as::<Yuv422>(frame, (x0, y0, x1, y1), bins, threshold),
-            PixelFormat::Gray8 => self.compute_as::<Gray8>(frame, (x0, y0, x1, y1), bins, threshold),
+            PixelFormat::Rgb565 => self.compute_as::<Rgb565>(frame, rect, params),
+            PixelFormat::Rgb888 => self.compute_as::<Rgb888>(frame, rect, params),
+            PixelFormat::Yuv422 => self.compute_as::<Yuv422>(frame, rect, params),
+            PixelFormat::Gray8 => self.compute_as::<Gray8>(frame, rect, params),
         }
     }
 
-    fn compute_as<P: PixelRead>(
-        &mut self,
-        frame: &Frame<'_>,
-        (x0, y0, x1, y1): (usize, usize, usize, usize),
-        bins: usize,
-        threshold: u16,
-    ) {
+    fn compute_as<P: PixelRead>(&mut self, frame: &Frame<'_>, rect: (usize, usize, usize, usize), p: EdgeParams) {
+        let EdgeParams { bins, threshold, min_spacing } = p;
+        let (x0, y0, x1, y1) = rect;
         let (w, h) = (frame.width(), frame.height());
         let (x0, y0) = (x0.min(w), y0.min(h));
         let (x1, y1) = (x1.clamp(x0, w), y1.clamp(y0, h));
-        // Coarsen the grid until the region fits.
+        // Start at the spacing the histograms need, coarsen until the region fits.
         let mut shift = 0;
+        while shift < 12 && (2usize << shift) <= min_spacing {
+            shift += 1;
+        }
         while shift < 12 && ((x1 - x0) >> shift).max(1) * ((y1 - y0) >> shift).max(1) > E {
             shift += 1;
         }
@@ -254,7 +260,7 @@ mod tests {
             let px = stripes(40, 40, vertical);
             let f = Frame::packed(&px, 40, 40, PixelFormat::Gray8).unwrap();
             let mut map = EdgeMap::<2048>::new();
-            map.compute(&f, (0, 0, 40, 40), 8, 50);
+            map.compute(&f, (0, 0, 40, 40), EdgeParams { bins: 8, threshold: 50, min_spacing: 1 });
             assert_eq!(map.spacing(), 1);
             let mut h = Histogram::<16>::new();
             let l = Lattice::new(Sampling::Full, 0, 10.0, 10.0);
@@ -270,16 +276,18 @@ mod tests {
         let f = Frame::packed(&flat, 64, 64, PixelFormat::Gray8).unwrap();
         let mut map = EdgeMap::<256>::new();
         // 64x64 = 4096 pixels into 256 cells: spacing 4.
-        map.compute(&f, (0, 0, 64, 64), 8, 1);
+        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 1, min_spacing: 1 });
         assert_eq!(map.spacing(), 4);
         assert_eq!(map.bin_at(30, 30), None, "a flat frame has no edges");
         assert_eq!(map.bin_at(100, 30), None, "outside the frame");
         // Stripes 2 grey levels apart: a gradient of 8, under a threshold of 10.
         let faint: Vec<u8> = (0..64 * 64).map(|i| if (i % 64) / 4 % 2 == 0 { 100 } else { 102 }).collect();
         let f = Frame::packed(&faint, 64, 64, PixelFormat::Gray8).unwrap();
-        map.compute(&f, (0, 0, 64, 64), 8, 10);
+        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 10, min_spacing: 1 });
         assert!((0..64).all(|x| map.bin_at(x, 30).is_none()));
-        map.compute(&f, (0, 0, 64, 64), 8, 5);
+        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 5, min_spacing: 3 });
+        assert_eq!(map.spacing(), 4, "budget 256 cells still rules");
+        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 5, min_spacing: 1 });
         assert!((0..64).any(|x| map.bin_at(x, 30).is_some()));
     }
 }

@@ -60,7 +60,7 @@ pub use filter::{Dynamics, Particle, Resampling};
 pub use frame::{Frame, PixelFormat};
 pub use geometry::{BoundingBox, Ellipse};
 pub use colour::Binning;
-pub use edges::EdgeMap;
+pub use edges::{EdgeMap, EdgeParams};
 pub use histogram::{Histogram, Model};
 pub use region::Sampling;
 pub use likelihood::{Combination, Likelihood, Sigma};

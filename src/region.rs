@@ -67,6 +67,11 @@ impl Lattice {
         }
         l
     }
+
+    /// Rows and columns between samples.
+    pub(crate) fn step(&self) -> usize {
+        self.step as usize
+    }
 }
 
 /// The integer form of one ellipse, ready for rasterising.

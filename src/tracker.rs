@@ -2,7 +2,7 @@
 //! model and explicit searching / tracking / lost states.
 
 use crate::config::{Config, MAX_EDGE_BINS};
-use crate::edges::EdgeMap;
+use crate::edges::{EdgeMap, EdgeParams};
 use crate::error::{ConfigError, Error, ParamProblem, RegionError};
 use crate::filter::{Bounds, Particle, mean_state, resample};
 use crate::frame::Frame;
@@ -125,10 +125,12 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
         }
     }
 
-    /// Computes the edge map over the pixel rectangle `[x0, x1) × [y0, y1)`.
-    fn map_edges(&mut self, cfg: &Config, frame: &Frame<'_>, rect: (usize, usize, usize, usize)) {
+    /// Computes the edge map over the pixel rectangle `[x0, x1) × [y0, y1)`,
+    /// as finely as regions with half axes `half_axes` are sampled.
+    fn map_edges(&mut self, cfg: &Config, frame: &Frame<'_>, rect: (usize, usize, usize, usize), half_axes: (Real, Real)) {
         if let Some(e) = cfg.edges {
-            self.map.compute(frame, rect, e.bins as usize, e.threshold);
+            let min_spacing = Lattice::new(cfg.sampling, cfg.max_samples, half_axes.0, half_axes.1).step();
+            self.map.compute(frame, rect, EdgeParams { bins: e.bins as usize, threshold: e.threshold, min_spacing });
         }
     }
 }
@@ -315,7 +317,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         let (fw, fh) = (frame.width(), frame.height());
         let e = Ellipse::from_box(bbox);
         let sc = &mut self.scratch;
-        sc.map_edges(cfg, frame, cover(&e, fw, fh));
+        sc.map_edges(cfg, frame, cover(&e, fw, fh), (e.hx, e.hy));
         sc.observe(cfg, frame, &e, cfg.edges.is_some());
         let colour = Model::from_histogram(&sc.colour).ok_or(RegionError::NoPixels)?;
         let edge = if cfg.edges.is_some() { Model::from_histogram(&sc.edge) } else { None };
@@ -324,7 +326,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         // Background similarity on a grid of target-sized regions that do not
         // touch the target: at most 8x8 of them, spaced at least one target
         // size apart.
-        sc.map_edges(cfg, frame, (0, 0, fw, fh));
+        sc.map_edges(cfg, frame, (0, 0, fw, fh), (e.hx, e.hy));
         let (fw, fh) = (fw as Real, fh as Real);
         let step_x = bbox.width.max(fw / 8.0);
         let step_y = bbox.height.max(fh / 8.0);
@@ -415,7 +417,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
                 let (a, b, c, d) = cover(&p.ellipse(), size.0, size.1);
                 (x0, y0, x1, y1) = (x0.min(a), y0.min(b), x1.max(c), y1.max(d));
             }
-            self.scratch.map_edges(cfg, frame, (x0, y0, x1, y1));
+            self.scratch.map_edges(cfg, frame, (x0, y0, x1, y1), target.half_axes);
         }
         // Similarity per particle, kept in `weights` until σ is known.
         let mut appearing = 0u16;

@@ -55,7 +55,36 @@ enum Command {
         #[command(flatten)]
         common: Common,
     },
+    /// Runs each configuration variant of the ablation study over the
+    /// sequences for several seeds and prints one markdown table of mean
+    /// AUC, P20 and ms/frame.
+    Ablate {
+        /// Sequence folders or .pft fixture files.
+        #[arg(required = true)]
+        seqs: Vec<PathBuf>,
+        /// Seeds 1..=N are run for every variant.
+        #[arg(long, default_value_t = 3)]
+        seeds: u64,
+        /// Run only the variants whose name contains this.
+        #[arg(long)]
+        only: Option<String>,
+        #[command(flatten)]
+        common: Common,
+    },
 }
+
+/// The ablation study: each variant is a list of `--set` overrides applied on
+/// top of the default configuration (and of the command line's `--set`s).
+const VARIANTS: &[(&str, &[&str])] = &[
+    ("paper 1: RGB, all pixels, σ 0.2", &["sampling=full", "edges=off", "sigma=0.2", "eps=0", "binning=rgb8x8x8"]),
+    ("checkerboard", &["sampling=checkerboard", "edges=off", "sigma=0.2", "eps=0", "binning=rgb8x8x8"]),
+    ("quarter", &["sampling=quarter", "edges=off", "sigma=0.2", "eps=0", "binning=rgb8x8x8"]),
+    ("all pixels, budget 400", &["sampling=full", "max_samples=400", "edges=off", "sigma=0.2", "eps=0"]),
+    ("+ edges 8 bins, threshold 50, product", &["sampling=full", "edges=8:50", "combination=product", "sigma=0.2", "eps=0"]),
+    ("+ adaptive σ [0.02, 0.5] + ε 0.005", &["sampling=full", "edges=off", "adaptive_sigma=0.02:0.5", "eps=0.005"]),
+    ("HSV 8x8x4", &["sampling=full", "edges=off", "sigma=0.2", "eps=0", "binning=hsv8x8x4"]),
+    ("defaults", &[]),
+];
 
 /// A loaded sequence, in whatever format it came.
 struct Loaded {
@@ -142,89 +171,116 @@ struct Row {
     reacquired: usize,
 }
 
-fn run_one(path: &Path, common: &Common) -> Result<Row, String> {
-    let seq = load(path)?;
+/// Tracks one loaded sequence and scores it.
+fn evaluate(seq: &Loaded, config: Config, seed: u64) -> Result<(Row, Run), String> {
     let frames: Vec<Frame<'_>> = seq
         .frames
         .iter()
         .enumerate()
         .map(|(i, px)| {
             Frame::new(px, seq.width, seq.height, seq.stride, seq.format)
-                .map_err(|e| format!("{}: frame {}: {e}", path.display(), i + 1))
+                .map_err(|e| format!("{}: frame {}: {e}", seq.name, i + 1))
         })
         .collect::<Result<_, _>>()?;
-    let init = *seq
-        .truth
-        .first()
-        .ok_or_else(|| format!("{}: no frames", path.display()))?;
+    let init = *seq.truth.first().ok_or_else(|| format!("{}: no frames", seq.name))?;
     if !has_target(&init) {
-        return Err(format!(
-            "{}: the first ground-truth box has no target to start from",
-            path.display()
-        ));
+        return Err(format!("{}: the first ground-truth box has no target to start from", seq.name));
     }
     let pb = bar(frames.len(), "track");
     pb.set_prefix(seq.name.clone());
-    let run: Run = track(common.config, common.seed, &frames, init, |i, _| {
-        pb.set_position(i as u64)
-    })
-    .map_err(|e| format!("{}: {e}", path.display()))?;
+    let run = track(config, seed, &frames, init, |i, _| pb.set_position(i as u64))
+        .map_err(|e| format!("{}: {e}", seq.name))?;
     pb.finish_and_clear();
-
-    if common.frames {
-        println!("appearance threshold: {:.3}", run.threshold);
-        println!(
-            "{:>5} {:>9} {:>11} {:>5} {:>4} {:>27} {:>27}",
-            "frame", "state", "event", "conf", "app", "box", "truth"
-        );
-        for (i, e) in run.estimates.iter().enumerate() {
-            let b = e.bbox();
-            let t = seq.truth.get(i + 1).copied().unwrap_or_default();
-            println!(
-                "{:>5} {:>9} {:>11} {:>5.3} {:>4} {:>6.1},{:>6.1},{:>6.1},{:>6.1} {:>6.1},{:>6.1},{:>6.1},{:>6.1}",
-                i + 2,
-                format!("{:?}", e.state),
-                e.event.map(|v| format!("{v:?}")).unwrap_or_default(),
-                e.confidence,
-                e.appearing,
-                b.x,
-                b.y,
-                b.width,
-                b.height,
-                t.x,
-                t.y,
-                t.width,
-                t.height
-            );
-        }
-    }
-    let out = common.out_dir.join(format!("{}.txt", seq.name));
-    let text: String = run
-        .boxes
-        .iter()
-        .map(|b| format!("{:.2},{:.2},{:.2},{:.2}\n", b.x, b.y, b.width, b.height))
-        .collect();
-    std::fs::write(&out, text).map_err(|e| format!("{}: {e}", out.display()))?;
-
-    let s =
-        score(&run.boxes, &seq.truth).ok_or_else(|| format!("{}: no frame with a target to score", path.display()))?;
+    let s = score(&run.boxes, &seq.truth).ok_or_else(|| format!("{}: no frame with a target to score", seq.name))?;
     let count = |ev: Event| run.estimates.iter().filter(|e| e.event == Some(ev)).count();
-    Ok(Row {
-        name: seq.name,
+    let row = Row {
+        name: seq.name.clone(),
         auc: s.auc,
         p20: s.precision20,
         ms: median(&run.step_ms),
         frames: seq.frames.len(),
         lost: count(Event::LostTarget),
         reacquired: count(Event::Reacquired),
-    })
+    };
+    Ok((row, run))
+}
+
+fn print_frames(seq: &Loaded, run: &Run) {
+    println!("appearance threshold: {:.3}", run.threshold);
+    println!("{:>5} {:>9} {:>11} {:>5} {:>4} {:>27} {:>27}", "frame", "state", "event", "conf", "app", "box", "truth");
+    for (i, e) in run.estimates.iter().enumerate() {
+        let b = e.bbox();
+        let t = seq.truth.get(i + 1).copied().unwrap_or_default();
+        println!(
+            "{:>5} {:>9} {:>11} {:>5.3} {:>4} {:>6.1},{:>6.1},{:>6.1},{:>6.1} {:>6.1},{:>6.1},{:>6.1},{:>6.1}",
+            i + 2,
+            format!("{:?}", e.state),
+            e.event.map(|v| format!("{v:?}")).unwrap_or_default(),
+            e.confidence,
+            e.appearing,
+            b.x,
+            b.y,
+            b.width,
+            b.height,
+            t.x,
+            t.y,
+            t.width,
+            t.height
+        );
+    }
+}
+
+fn run_one(path: &Path, common: &Common) -> Result<Row, String> {
+    let seq = load(path)?;
+    let (row, run) = evaluate(&seq, common.config, common.seed)?;
+    if common.frames {
+        print_frames(&seq, &run);
+    }
+    let out = common.out_dir.join(format!("{}.txt", seq.name));
+    let text: String =
+        run.boxes.iter().map(|b| format!("{:.2},{:.2},{:.2},{:.2}\n", b.x, b.y, b.width, b.height)).collect();
+    std::fs::write(&out, text).map_err(|e| format!("{}: {e}", out.display()))?;
+    Ok(row)
+}
+
+fn ablate(paths: &[PathBuf], seeds: u64, only: Option<&str>, common: &Common) -> Result<(), String> {
+    let seqs: Vec<Loaded> = paths.iter().map(|p| load(p)).collect::<Result<_, _>>()?;
+    println!(
+        "ablation over {} sequences, seeds 1..={seeds}, {PARTICLES} particles; extra settings: {}",
+        seqs.len(),
+        if common.set.is_empty() { "none".to_string() } else { common.set.join(" ") }
+    );
+    println!();
+    println!("| variant | settings | mean AUC | mean P20 | ms/frame |");
+    println!("|---|---|---|---|---|");
+    for (name, sets) in VARIANTS.iter().filter(|(n, _)| only.is_none_or(|o| n.contains(o))) {
+        let mut config = Config::default();
+        for s in sets.iter().map(|s| s.to_string()).chain(common.set.iter().cloned()) {
+            host_tests::settings::apply(&mut config, &s)?;
+        }
+        config.validate().map_err(|e| format!("variant `{name}`: {e}"))?;
+        let (mut auc, mut p20, mut ms, mut n) = (0.0, 0.0, 0.0, 0.0);
+        for seed in 1..=seeds {
+            for seq in &seqs {
+                let (row, _) = evaluate(seq, config, seed)?;
+                auc += row.auc;
+                p20 += row.p20;
+                ms += row.ms;
+                n += 1.0;
+            }
+        }
+        let shown = if sets.is_empty() { "(defaults)".to_string() } else { sets.join(" ") };
+        println!("| {name} | `{shown}` | {:.3} | {:.3} | {:.3} |", auc / n, p20 / n, ms / n);
+    }
+    Ok(())
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    let (paths, mut common) = match cli.command {
-        Command::Otb { seqs, common } => (seqs, common),
-        Command::Fixture { files, common } => (files, common),
+    let (paths, mut common, ablation) = match cli.command {
+        Command::Otb { seqs, common } => (seqs, common, None),
+        Command::Fixture { files, common } => (files, common, None),
+        Command::Ablate { seqs, seeds, only, common } => (seqs, common, Some((seeds, only))),
     };
     for s in &common.set {
         if let Err(e) = host_tests::settings::apply(&mut common.config, s) {
@@ -235,6 +291,15 @@ fn main() -> ExitCode {
     if let Err(e) = common.config.validate() {
         eprintln!("error: {e}");
         return ExitCode::FAILURE;
+    }
+    if let Some((seeds, only)) = ablation {
+        return match ablate(&paths, seeds, only.as_deref(), &common) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::FAILURE
+            }
+        };
     }
     if let Err(e) = std::fs::create_dir_all(&common.out_dir) {
         eprintln!("error: {}: {e}", common.out_dir.display());
