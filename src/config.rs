@@ -1,10 +1,10 @@
 //! The tracker's configuration and its validation.
 
+use crate::colour::Binning;
 use crate::error::{ConfigError, ParamProblem};
 use crate::filter::{Dynamics, Resampling};
-use crate::colour::Binning;
-use crate::region::Sampling;
 use crate::likelihood::{Combination, Likelihood, Sigma};
+use crate::region::Sampling;
 use crate::scalar::Real;
 
 /// Everything that tunes a [`crate::Tracker`]. Start from [`Config::default`]
@@ -100,6 +100,7 @@ impl Default for Config {
             dynamics: Dynamics {
                 position_noise: 0.10,
                 velocity_noise: 0.05,
+                velocity_decay: 1.0,
                 scale_noise: 0.01,
                 scale_rate_noise: 0.0,
             },
@@ -165,15 +166,22 @@ impl Config {
         }
         if let Some(e) = self.edges {
             if !matches!(e.bins, 2 | 4 | 8 | 16) {
-                return Err(ConfigError { field: "edges.bins", problem: ParamProblem::OutOfRange });
+                return Err(ConfigError {
+                    field: "edges.bins",
+                    problem: ParamProblem::OutOfRange,
+                });
             }
             if e.threshold > 1500 {
-                return Err(ConfigError { field: "edges.threshold", problem: ParamProblem::OutOfRange });
+                return Err(ConfigError {
+                    field: "edges.threshold",
+                    problem: ParamProblem::OutOfRange,
+                });
             }
         }
         let d = &self.dynamics;
         check("dynamics.position_noise", d.position_noise, 0.0, 10.0)?;
         check("dynamics.velocity_noise", d.velocity_noise, 0.0, 10.0)?;
+        check("dynamics.velocity_decay", d.velocity_decay, 0.0, 1.0)?;
         check("dynamics.scale_noise", d.scale_noise, 0.0, 0.5)?;
         check("dynamics.scale_rate_noise", d.scale_rate_noise, 0.0, 0.1)?;
         check("alpha", self.alpha, 0.0, 1.0)?;
@@ -211,9 +219,26 @@ mod tests {
     fn each_bad_field_is_named() {
         type Case = (fn(&mut Config), &'static str, ParamProblem);
         let cases: [Case; 15] = [
-            (|c| c.combination = Combination::Weighted { colour: 1.5 }, "combination.colour", ParamProblem::OutOfRange),
-            (|c| c.edges = Some(EdgeCue { bins: 7, threshold: 50 }), "edges.bins", ParamProblem::OutOfRange),
-            (|c| c.edges = Some(EdgeCue { bins: 8, threshold: 9999 }), "edges.threshold", ParamProblem::OutOfRange),
+            (
+                |c| c.combination = Combination::Weighted { colour: 1.5 },
+                "combination.colour",
+                ParamProblem::OutOfRange,
+            ),
+            (
+                |c| c.edges = Some(EdgeCue { bins: 7, threshold: 50 }),
+                "edges.bins",
+                ParamProblem::OutOfRange,
+            ),
+            (
+                |c| {
+                    c.edges = Some(EdgeCue {
+                        bins: 8,
+                        threshold: 9999,
+                    })
+                },
+                "edges.threshold",
+                ParamProblem::OutOfRange,
+            ),
             (
                 |c| c.likelihood.sigma = Sigma::Fixed(0.0),
                 "likelihood.sigma",

@@ -11,8 +11,8 @@
 //! histograms make, with no allocation and a bounded cost.
 
 use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
-use crate::histogram::Histogram;
 use crate::geometry::Ellipse;
+use crate::histogram::Histogram;
 use crate::region::{Lattice, for_each_in_ellipse};
 
 /// Directions at `k · 11.25°` for `k = 0..16`, as `(cos, sin) · 4096`: the
@@ -45,7 +45,11 @@ const WEAK: u8 = u8::MAX;
 /// `bins` must be 2, 4, 8 or 16.
 pub fn orientation_bin(gx: i32, gy: i32, bins: usize) -> usize {
     // Orientation is modulo 180°: fold into the upper half plane.
-    let (gx, gy) = if gy < 0 || (gy == 0 && gx < 0) { (-gx, -gy) } else { (gx, gy) };
+    let (gx, gy) = if gy < 0 || (gy == 0 && gx < 0) {
+        (-gx, -gy)
+    } else {
+        (gx, gy)
+    };
     let stride = 16 / bins.clamp(2, 16);
     // Bin = the number of boundaries at or clockwise of the gradient; the
     // boundaries are sorted by angle, so binary search.
@@ -96,7 +100,14 @@ impl<const E: usize> Default for EdgeMap<E> {
 impl<const E: usize> EdgeMap<E> {
     /// An empty map (every lookup is weak).
     pub const fn new() -> Self {
-        EdgeMap { cells: [WEAK; E], x0: 0, y0: 0, cols: 0, rows: 0, shift: 0 }
+        EdgeMap {
+            cells: [WEAK; E],
+            x0: 0,
+            y0: 0,
+            cols: 0,
+            rows: 0,
+            shift: 0,
+        }
     }
 
     /// Grid spacing in pixels: 1 when the region fits the buffer at full resolution.
@@ -119,7 +130,11 @@ impl<const E: usize> EdgeMap<E> {
     }
 
     fn compute_as<P: PixelRead>(&mut self, frame: &Frame<'_>, rect: (usize, usize, usize, usize), p: EdgeParams) {
-        let EdgeParams { bins, threshold, min_spacing } = p;
+        let EdgeParams {
+            bins,
+            threshold,
+            min_spacing,
+        } = p;
         let (x0, y0, x1, y1) = rect;
         let (w, h) = (frame.width(), frame.height());
         let (x0, y0) = (x0.min(w), y0.min(h));
@@ -136,27 +151,48 @@ impl<const E: usize> EdgeMap<E> {
         let cols = (x1 - x0).div_ceil(d).min(E);
         let rows = (y1 - y0).div_ceil(d);
         let rows = if cols == 0 { 0 } else { rows.min(E / cols) };
-        *self = EdgeMap { cells: self.cells, x0, y0, cols, rows, shift };
-        let t2 = threshold as i32 * threshold as i32;
-        let gray = |x: usize, y: usize| -> i32 {
-            frame.row(y).and_then(|r| P::rgb(r, x)).map_or(0, |[r, g, b]| luma(r, g, b))
+        *self = EdgeMap {
+            cells: self.cells,
+            x0,
+            y0,
+            cols,
+            rows,
+            shift,
         };
+        let t2 = threshold as i32 * threshold as i32;
+        let empty: &[u8] = &[];
         for j in 0..rows {
             let y = y0 + j * d;
-            for i in 0..cols {
+            let out = self.cells.get_mut(j * cols..(j + 1) * cols).unwrap_or_default();
+            // The Sobel window needs rows y-1..=y+1: the border rows are weak.
+            if y == 0 || y + 1 >= h {
+                out.fill(WEAK);
+                continue;
+            }
+            let rows3 = [y - 1, y, y + 1].map(|r| frame.row(r).unwrap_or(empty));
+            // Luma of column x in the three rows.
+            let column = |x: usize| rows3.map(|r| P::luma(r, x).map_or(0, i32::from));
+            // Slide a 3-column window along the row; at spacing 1 each step
+            // decodes one new column instead of nine pixels.
+            let mut window: Option<(usize, [[i32; 3]; 3])> = None;
+            for (i, cell) in out.iter_mut().enumerate() {
                 let x = x0 + i * d;
-                let v = if x == 0 || y == 0 || x + 1 >= w || y + 1 >= h {
+                *cell = if x == 0 || x + 1 >= w {
                     WEAK
                 } else {
-                    let (a, b, c) = (gray(x - 1, y - 1), gray(x, y - 1), gray(x + 1, y - 1));
-                    let (dd, f) = (gray(x - 1, y), gray(x + 1, y));
-                    let (g, hh, k) = (gray(x - 1, y + 1), gray(x, y + 1), gray(x + 1, y + 1));
+                    let cols3 = match window {
+                        Some((px, [_, m, r])) if px + 1 == x => [m, r, column(x + 1)],
+                        _ => [column(x - 1), column(x), column(x + 1)],
+                    };
+                    window = Some((x, cols3));
+                    let [[a, dd, g], [b, _, hh], [c, f, k]] = cols3;
                     let (gx, gy) = sobel([a, b, c, dd, 0, f, g, hh, k]);
-                    if gx * gx + gy * gy < t2 { WEAK } else { orientation_bin(gx, gy, bins) as u8 }
+                    if gx * gx + gy * gy < t2 {
+                        WEAK
+                    } else {
+                        orientation_bin(gx, gy, bins) as u8
+                    }
                 };
-                if let Some(cell) = self.cells.get_mut(j * cols + i) {
-                    *cell = v;
-                }
             }
         }
     }
@@ -178,7 +214,13 @@ impl<const E: usize> EdgeMap<E> {
 
     /// Replaces `hist` with the edge-orientation histogram of ellipse `e`,
     /// with the same kernel weights and lattice as the colour histogram.
-    pub(crate) fn histogram<const B: usize>(&self, frame: &Frame<'_>, e: &Ellipse, lattice: Lattice, hist: &mut Histogram<B>) {
+    pub(crate) fn histogram<const B: usize>(
+        &self,
+        frame: &Frame<'_>,
+        e: &Ellipse,
+        lattice: Lattice,
+        hist: &mut Histogram<B>,
+    ) {
         hist.clear();
         for_each_in_ellipse(frame, e, lattice, |_, x, y, w| {
             if let Some(bin) = self.bin_at(x, y) {
@@ -186,12 +228,6 @@ impl<const E: usize> EdgeMap<E> {
             }
         });
     }
-}
-
-/// BT.601 luma from 8-bit RGB, in 8-bit fixed point.
-#[inline(always)]
-fn luma(r: u8, g: u8, b: u8) -> i32 {
-    (77 * r as i32 + 150 * g as i32 + 29 * b as i32) >> 8
 }
 
 /// Sobel gradients of a 3x3 window given row by row (the centre is unused).
@@ -230,7 +266,10 @@ mod tests {
             let width = 180.0 / bins as f64;
             for k in 0..bins {
                 let theta = (k as f64 + 0.5) * width;
-                let (gx, gy) = ((1000.0 * theta.to_radians().cos()) as i32, (1000.0 * theta.to_radians().sin()) as i32);
+                let (gx, gy) = (
+                    (1000.0 * theta.to_radians().cos()) as i32,
+                    (1000.0 * theta.to_radians().sin()) as i32,
+                );
                 assert_eq!(orientation_bin(gx, gy, bins), k, "{bins} bins, {theta}°");
                 assert_eq!(orientation_bin(-gx, -gy, bins), k, "{bins} bins, {theta}° + 180°");
             }
@@ -260,13 +299,88 @@ mod tests {
             let px = stripes(40, 40, vertical);
             let f = Frame::packed(&px, 40, 40, PixelFormat::Gray8).unwrap();
             let mut map = EdgeMap::<2048>::new();
-            map.compute(&f, (0, 0, 40, 40), EdgeParams { bins: 8, threshold: 50, min_spacing: 1 });
+            map.compute(
+                &f,
+                (0, 0, 40, 40),
+                EdgeParams {
+                    bins: 8,
+                    threshold: 50,
+                    min_spacing: 1,
+                },
+            );
             assert_eq!(map.spacing(), 1);
             let mut h = Histogram::<16>::new();
             let l = Lattice::new(Sampling::Full, 0, 10.0, 10.0);
-            map.histogram(&f, &Ellipse { cx: 20.0, cy: 20.0, hx: 10.0, hy: 10.0 }, l, &mut h);
+            map.histogram(
+                &f,
+                &Ellipse {
+                    cx: 20.0,
+                    cy: 20.0,
+                    hx: 10.0,
+                    hy: 10.0,
+                },
+                l,
+                &mut h,
+            );
             assert!(h.total() > 0);
-            assert_eq!(h.counts()[want], h.total(), "vertical={vertical}: {:?}", &h.counts()[..8]);
+            assert_eq!(
+                h.counts()[want],
+                h.total(),
+                "vertical={vertical}: {:?}",
+                &h.counts()[..8]
+            );
+        }
+    }
+
+    #[test]
+    fn sliding_window_matches_direct_sobel_at_every_spacing() {
+        // Reason: cross-check the map (sliding window, one new column per
+        // step) against the plain per-pixel definition on a random image.
+        let (w, h) = (37usize, 29usize);
+        let mut seed = 99u32;
+        let px: Vec<u8> = (0..w * h * 3)
+            .map(|_| {
+                seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                (seed >> 24) as u8
+            })
+            .collect();
+        let f = Frame::packed(&px, w, h, PixelFormat::Rgb888).unwrap();
+        let l = |x: usize, y: usize| crate::frame::luma(f.rgb(x, y).unwrap()) as i32;
+        for spacing in [1usize, 2, 4] {
+            let mut map = EdgeMap::<4096>::new();
+            let (x0, y0) = (3usize, 2usize);
+            map.compute(
+                &f,
+                (x0, y0, w, h),
+                EdgeParams {
+                    bins: 8,
+                    threshold: 120,
+                    min_spacing: spacing,
+                },
+            );
+            assert_eq!(map.spacing(), spacing);
+            for y in (y0..h).step_by(spacing) {
+                for x in (x0..w).step_by(spacing) {
+                    let want = if x == 0 || y == 0 || x + 1 >= w || y + 1 >= h {
+                        None
+                    } else {
+                        let win = [
+                            l(x - 1, y - 1),
+                            l(x, y - 1),
+                            l(x + 1, y - 1),
+                            l(x - 1, y),
+                            l(x, y),
+                            l(x + 1, y),
+                            l(x - 1, y + 1),
+                            l(x, y + 1),
+                            l(x + 1, y + 1),
+                        ];
+                        let (gx, gy) = sobel(win);
+                        (gx * gx + gy * gy >= 120 * 120).then(|| orientation_bin(gx, gy, 8))
+                    };
+                    assert_eq!(map.bin_at(x, y), want, "spacing {spacing} at ({x}, {y})");
+                }
+            }
         }
     }
 
@@ -276,18 +390,52 @@ mod tests {
         let f = Frame::packed(&flat, 64, 64, PixelFormat::Gray8).unwrap();
         let mut map = EdgeMap::<256>::new();
         // 64x64 = 4096 pixels into 256 cells: spacing 4.
-        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 1, min_spacing: 1 });
+        map.compute(
+            &f,
+            (0, 0, 64, 64),
+            EdgeParams {
+                bins: 8,
+                threshold: 1,
+                min_spacing: 1,
+            },
+        );
         assert_eq!(map.spacing(), 4);
         assert_eq!(map.bin_at(30, 30), None, "a flat frame has no edges");
         assert_eq!(map.bin_at(100, 30), None, "outside the frame");
         // Stripes 2 grey levels apart: a gradient of 8, under a threshold of 10.
-        let faint: Vec<u8> = (0..64 * 64).map(|i| if (i % 64) / 4 % 2 == 0 { 100 } else { 102 }).collect();
+        let faint: Vec<u8> = (0..64 * 64)
+            .map(|i| if (i % 64) / 4 % 2 == 0 { 100 } else { 102 })
+            .collect();
         let f = Frame::packed(&faint, 64, 64, PixelFormat::Gray8).unwrap();
-        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 10, min_spacing: 1 });
+        map.compute(
+            &f,
+            (0, 0, 64, 64),
+            EdgeParams {
+                bins: 8,
+                threshold: 10,
+                min_spacing: 1,
+            },
+        );
         assert!((0..64).all(|x| map.bin_at(x, 30).is_none()));
-        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 5, min_spacing: 3 });
+        map.compute(
+            &f,
+            (0, 0, 64, 64),
+            EdgeParams {
+                bins: 8,
+                threshold: 5,
+                min_spacing: 3,
+            },
+        );
         assert_eq!(map.spacing(), 4, "budget 256 cells still rules");
-        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 5, min_spacing: 1 });
+        map.compute(
+            &f,
+            (0, 0, 64, 64),
+            EdgeParams {
+                bins: 8,
+                threshold: 5,
+                min_spacing: 1,
+            },
+        );
         assert!((0..64).any(|x| map.bin_at(x, 30).is_some()));
     }
 }

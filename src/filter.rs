@@ -60,6 +60,11 @@ pub struct Dynamics {
     pub position_noise: Real,
     /// Standard deviation of the velocity noise, as a fraction of `s`.
     pub velocity_noise: Real,
+    /// How much of its velocity a particle keeps each frame, in `[0, 1]`:
+    /// `v ← decay · v + noise`. 1 is the papers' constant-velocity model; less
+    /// lets a velocity that resampling once favoured fade instead of carrying
+    /// the particle off when the target stops or turns.
+    pub velocity_decay: Real,
     /// Standard deviation of the multiplicative noise on each half axis.
     pub scale_noise: Real,
     /// Standard deviation of the noise on the scale rate `ȧ`.
@@ -89,8 +94,8 @@ impl Dynamics {
         let mut n = || normal_from_bits(rng.next_u64());
         p.x += p.vx + self.position_noise * s * n();
         p.y += p.vy + self.position_noise * s * n();
-        p.vx += self.velocity_noise * s * n();
-        p.vy += self.velocity_noise * s * n();
+        p.vx = self.velocity_decay * p.vx + self.velocity_noise * s * n();
+        p.vy = self.velocity_decay * p.vy + self.velocity_noise * s * n();
         p.a_dot = (p.a_dot + self.scale_rate_noise * n()).clamp(-0.1, 0.1);
         p.hx *= 1.0 + p.a_dot + self.scale_noise * n();
         p.hy *= 1.0 + p.a_dot + self.scale_noise * n();
@@ -217,6 +222,7 @@ mod tests {
         let d = Dynamics {
             position_noise: 0.0,
             velocity_noise: 0.0,
+            velocity_decay: 1.0,
             scale_noise: 0.0,
             scale_rate_noise: 0.0,
         };
@@ -246,6 +252,7 @@ mod tests {
         let d = Dynamics {
             position_noise: 0.1,
             velocity_noise: 0.0,
+            velocity_decay: 1.0,
             scale_noise: 0.0,
             scale_rate_noise: 0.0,
         };
@@ -277,6 +284,7 @@ mod tests {
         let d = Dynamics {
             position_noise: 0.0,
             velocity_noise: 0.0,
+            velocity_decay: 1.0,
             scale_noise: 0.0,
             scale_rate_noise: 0.0,
         };

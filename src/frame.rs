@@ -195,6 +195,20 @@ impl<'a> Frame<'a> {
 pub(crate) trait PixelRead {
     /// 8-bit RGB of pixel `x` of `row`, or `None` if `x` is past the row.
     fn rgb(row: &[u8], x: usize) -> Option<[u8; 3]>;
+
+    /// 8-bit luma (BT.601) of pixel `x` of `row`: the grey level edges are
+    /// taken on. Formats that carry it (GRAY8, YUV) read it directly.
+    #[inline(always)]
+    fn luma(row: &[u8], x: usize) -> Option<u8> {
+        Self::rgb(row, x).map(luma)
+    }
+}
+
+/// BT.601 luma of 8-bit RGB, in 8-bit fixed point (the same weights as
+/// [`rgb_to_yuv`]'s Y).
+#[inline(always)]
+pub fn luma([r, g, b]: [u8; 3]) -> u8 {
+    ((77 * r as u32 + 150 * g as u32 + 29 * b as u32 + 128) >> 8) as u8
 }
 
 /// Marker for [`PixelFormat::Rgb565`].
@@ -237,6 +251,11 @@ impl PixelRead for Yuv422 {
         let v = *row.get(pair + 3)? as i32 - 128;
         Some(yuv_to_rgb(y, u, v))
     }
+
+    #[inline(always)]
+    fn luma(row: &[u8], x: usize) -> Option<u8> {
+        row.get(2 * x).copied()
+    }
 }
 
 impl PixelRead for Gray8 {
@@ -244,6 +263,11 @@ impl PixelRead for Gray8 {
     fn rgb(row: &[u8], x: usize) -> Option<[u8; 3]> {
         let g = *row.get(x)?;
         Some([g, g, g])
+    }
+
+    #[inline(always)]
+    fn luma(row: &[u8], x: usize) -> Option<u8> {
+        row.get(x).copied()
     }
 }
 

@@ -227,7 +227,12 @@ mod tests {
             *p = (i * 37 % 251) as u8;
         }
         let f = Frame::packed(&buf, 64, 64, PixelFormat::Rgb888).unwrap();
-        let e = Ellipse { cx: 30.0, cy: 33.0, hx: 12.0, hy: 9.0 };
+        let e = Ellipse {
+            cx: 30.0,
+            cy: 33.0,
+            hx: 12.0,
+            hy: 9.0,
+        };
         for sampling in [Sampling::Full, Sampling::Checkerboard, Sampling::Quarter] {
             for binning in [Binning::Rgb8x8x8, Binning::Hsv8x8x4] {
                 let mut h = Histogram::<512>::new();
@@ -235,9 +240,14 @@ mod tests {
                 let sum: u64 = h.counts().iter().map(|&c| c as u64).sum();
                 assert_eq!(sum, h.total() as u64);
                 let mut mass = 0u64;
-                for_each_in_ellipse(&f, &e, Lattice::new(sampling, 0, e.hx, e.hy), |_, _, _, w| mass += w as u64);
+                for_each_in_ellipse(&f, &e, Lattice::new(sampling, 0, e.hx, e.hy), |_, _, _, w| {
+                    mass += w as u64
+                });
                 assert_eq!(sum, mass);
-                assert!(h.counts()[binning.bins()..].iter().all(|&c| c == 0), "bins past {binning:?}'s range");
+                assert!(
+                    h.counts()[binning.bins()..].iter().all(|&c| c == 0),
+                    "bins past {binning:?}'s range"
+                );
                 // A model made from it sums to 1 within the rounding of 512 bins.
                 let m = Model::from_histogram(&h).unwrap();
                 let qsum: i64 = m.bins().iter().map(|&q| q as i64).sum();
@@ -257,11 +267,20 @@ mod tests {
             for x in 0..w {
                 let fx = x as f32 / w as f32;
                 let fy = y as f32 / h as f32;
-                buf.extend_from_slice(&[(255.0 * fx) as u8, (255.0 * fy) as u8, (128.0 + 100.0 * (fx - fy)) as u8]);
+                buf.extend_from_slice(&[
+                    (255.0 * fx) as u8,
+                    (255.0 * fy) as u8,
+                    (128.0 + 100.0 * (fx - fy)) as u8,
+                ]);
             }
         }
         let f = Frame::packed(&buf, w, h, PixelFormat::Rgb888).unwrap();
-        let e = Ellipse { cx: 60.0, cy: 45.0, hx: 30.0, hy: 25.0 };
+        let e = Ellipse {
+            cx: 60.0,
+            cy: 45.0,
+            hx: 30.0,
+            hy: 25.0,
+        };
         let mut full = Histogram::<512>::new();
         full.compute(&f, &e, Binning::Rgb8x8x8, Sampling::Full);
         let m = Model::from_histogram(&full).unwrap();
@@ -347,7 +366,6 @@ mod tests {
         m.blend(&Histogram::new(), 0.5);
         assert_eq!(m, before, "an empty observation leaves the model alone");
     }
-
 
     #[test]
     fn distance_of_coefficient() {

@@ -43,8 +43,8 @@
 
 pub mod colour;
 pub mod config;
-pub mod error;
 pub mod edges;
+pub mod error;
 pub mod filter;
 pub mod frame;
 pub mod geometry;
@@ -54,15 +54,15 @@ pub mod region;
 pub mod scalar;
 pub mod tracker;
 
+pub use colour::Binning;
 pub use config::{Config, EdgeCue};
+pub use edges::{EdgeMap, EdgeParams};
 pub use error::{ConfigError, Error, FrameError, ParamProblem, RegionError};
 pub use filter::{Dynamics, Particle, Resampling};
 pub use frame::{Frame, PixelFormat};
 pub use geometry::{BoundingBox, Ellipse};
-pub use colour::Binning;
-pub use edges::{EdgeMap, EdgeParams};
 pub use histogram::{Histogram, Model};
-pub use region::Sampling;
 pub use likelihood::{Combination, Likelihood, Sigma};
+pub use region::Sampling;
 pub use scalar::Real;
 pub use tracker::{Estimate, Event, TrackState, Tracker};

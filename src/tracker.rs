@@ -80,7 +80,11 @@ struct Models<const K: usize> {
 impl<const K: usize> Models<K> {
     /// The largest squared distance the active cues can produce.
     fn d2_max(&self, cfg: &Config) -> Real {
-        if self.edge.is_some() { cfg.combination.d2_max() } else { 1.0 }
+        if self.edge.is_some() {
+            cfg.combination.d2_max()
+        } else {
+            1.0
+        }
     }
 }
 
@@ -127,10 +131,24 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
 
     /// Computes the edge map over the pixel rectangle `[x0, x1) × [y0, y1)`,
     /// as finely as regions with half axes `half_axes` are sampled.
-    fn map_edges(&mut self, cfg: &Config, frame: &Frame<'_>, rect: (usize, usize, usize, usize), half_axes: (Real, Real)) {
+    fn map_edges(
+        &mut self,
+        cfg: &Config,
+        frame: &Frame<'_>,
+        rect: (usize, usize, usize, usize),
+        half_axes: (Real, Real),
+    ) {
         if let Some(e) = cfg.edges {
             let min_spacing = Lattice::new(cfg.sampling, cfg.max_samples, half_axes.0, half_axes.1).step();
-            self.map.compute(frame, rect, EdgeParams { bins: e.bins as usize, threshold: e.threshold, min_spacing });
+            self.map.compute(
+                frame,
+                rect,
+                EdgeParams {
+                    bins: e.bins as usize,
+                    threshold: e.threshold,
+                    min_spacing,
+                },
+            );
         }
     }
 }
@@ -225,7 +243,11 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
             particles: [Particle::default(); N],
             resampled: [Particle::default(); N],
             weights: [1.0 / N as Real; N],
-            scratch: Scratch { colour: Histogram::new(), edge: Histogram::new(), map: EdgeMap::new() },
+            scratch: Scratch {
+                colour: Histogram::new(),
+                edge: Histogram::new(),
+                map: EdgeMap::new(),
+            },
             target: None,
             state: TrackState::Searching,
             misses: 0,
@@ -320,7 +342,11 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         sc.map_edges(cfg, frame, cover(&e, fw, fh), (e.hx, e.hy));
         sc.observe(cfg, frame, &e, cfg.edges.is_some());
         let colour = Model::from_histogram(&sc.colour).ok_or(RegionError::NoPixels)?;
-        let edge = if cfg.edges.is_some() { Model::from_histogram(&sc.edge) } else { None };
+        let edge = if cfg.edges.is_some() {
+            Model::from_histogram(&sc.edge)
+        } else {
+            None
+        };
         let models = Models { colour, edge };
 
         // Background similarity on a grid of target-sized regions that do not
@@ -351,7 +377,9 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         let threshold = if n >= 2 {
             let mean = s1 / n as Real;
             let var = (s2 / n as Real - mean * mean).max(0.0);
-            (mean + cfg.appearance_sigmas * sqrt(var)).max(cfg.min_appearance).min(1.0)
+            (mean + cfg.appearance_sigmas * sqrt(var))
+                .max(cfg.min_appearance)
+                .min(1.0)
         } else {
             cfg.min_appearance
         };

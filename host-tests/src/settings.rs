@@ -17,6 +17,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ("eps", "likelihood floor ε"),
     ("position_noise", "fraction of target size per frame"),
     ("velocity_noise", "fraction of target size per frame"),
+    ("velocity_decay", "v <- decay * v + noise; 1 = constant velocity"),
     ("scale_noise", "relative, per frame"),
     ("scale_rate_noise", "per frame"),
     ("alpha", "model adaptation rate"),
@@ -62,12 +63,18 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
                 _ => return Err(format!("binning: `{v}` is not rgb8x8x8 or hsv8x8x4")),
             }
         }
-        "max_samples" => c.max_samples = v.parse().map_err(|_| format!("max_samples: `{v}` is not a whole number"))?,
+        "max_samples" => {
+            c.max_samples = v
+                .parse()
+                .map_err(|_| format!("max_samples: `{v}` is not a whole number"))?
+        }
         "edges" => {
             c.edges = if v == "off" {
                 None
             } else {
-                let (b, t) = v.split_once(':').ok_or_else(|| format!("edges: `{v}` is not off or BINS:THRESHOLD"))?;
+                let (b, t) = v
+                    .split_once(':')
+                    .ok_or_else(|| format!("edges: `{v}` is not off or BINS:THRESHOLD"))?;
                 Some(EdgeCue {
                     bins: b.parse().map_err(|_| format!("edges: `{b}` is not a bin count"))?,
                     threshold: t.parse().map_err(|_| format!("edges: `{t}` is not a threshold"))?,
@@ -96,6 +103,7 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
         "eps" => c.likelihood.eps = num(key, v)?,
         "position_noise" => c.dynamics.position_noise = num(key, v)?,
         "velocity_noise" => c.dynamics.velocity_noise = num(key, v)?,
+        "velocity_decay" => c.dynamics.velocity_decay = num(key, v)?,
         "scale_noise" => c.dynamics.scale_noise = num(key, v)?,
         "scale_rate_noise" => c.dynamics.scale_rate_noise = num(key, v)?,
         "alpha" => c.alpha = num(key, v)?,
