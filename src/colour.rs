@@ -84,10 +84,7 @@ mod tests {
     fn rgb_binning_uses_top_three_bits() {
         assert_eq!(Binning::Rgb8x8x8.bin([0, 0, 0]), 0);
         assert_eq!(Binning::Rgb8x8x8.bin([255, 255, 255]), 511);
-        assert_eq!(
-            Binning::Rgb8x8x8.bin([0b1010_0000, 0b0110_0000, 0b0010_0000]),
-            (5 << 6) | (3 << 3) | 1
-        );
+        assert_eq!(Binning::Rgb8x8x8.bin([0b1010_0000, 0b0110_0000, 0b0010_0000]), (5 << 6) | (3 << 3) | 1);
     }
 
     /// Floating-point HSV, the textbook definition.
@@ -120,16 +117,8 @@ mod tests {
                 for b in (0..=255).step_by(15) {
                     let rgb = [r as u8, g as u8, b as u8];
                     let (h, s, v) = reference_hsv(rgb);
-                    let want_h = if s == 0.0 {
-                        0
-                    } else {
-                        ((h / 45.0).floor() as usize).min(7)
-                    };
-                    let want_s = if s == 0.0 {
-                        0
-                    } else {
-                        ((s * 255.0).floor() as usize >> 5).min(7)
-                    };
+                    let want_h = if s == 0.0 { 0 } else { ((h / 45.0).floor() as usize).min(7) };
+                    let want_s = if s == 0.0 { 0 } else { ((s * 255.0).floor() as usize >> 5).min(7) };
                     let want = (want_h << 5) | (want_s << 2) | (v as usize >> 6);
                     let got = Binning::Hsv8x8x4.bin(rgb);
                     assert!(got < 256);

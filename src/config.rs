@@ -43,9 +43,19 @@ pub struct Config {
     /// 0 keeps the initial model forever.
     pub alpha: Real,
     /// The model is updated only when the mean state's likelihood
-    /// `π_E[S] = exp(−d²/(2σ²))` (without the floor, with this frame's σ)
-    /// exceeds this, in `[0, 1]`, so occluded frames do not pollute it.
+    /// `π_E[S] = exp(−d²/(2σ_u²))` exceeds this, in `[0, 1]`, so occluded
+    /// frames do not pollute it (first paper), with `σ_u` = `update_sigma`.
     pub update_threshold: Real,
+    /// The σ of the model-update gate. It is its own, not the likelihood's:
+    /// an adaptive σ rescales every frame so that the best particle looks
+    /// good, which would open the gate on a frame where nothing matches
+    /// (measured: the model then drifts onto an occluder). With the first
+    /// paper's σ of 0.2 this is exactly its rule; the default 0.3 is a little
+    /// more permissive, because the combined colour + edge distance is larger
+    /// than colour's alone (measured on the real sequences: 0.2 gives mean
+    /// AUC 0.51, 0.3 gives 0.58, and both keep the model still while the
+    /// fixtures' target is hidden).
+    pub update_sigma: Real,
     /// A particle "appears" (sees the target) when its `ρ` exceeds the
     /// background mean by this many background standard deviations (the paper's 2).
     pub appearance_sigmas: Real,
@@ -76,36 +86,44 @@ pub struct EdgeCue {
     /// Gradients with `sqrt(gx² + gy²)` below this are dropped (Sobel on 8-bit
     /// grey levels, so strengths range up to about 1440).
     pub threshold: u16,
+    /// Count the dropped weak pixels in one more bin, so that the histogram
+    /// also measures how much of the region has edges. Without it, a flat
+    /// patch with a few stray edges can match a textured target perfectly
+    /// (measured on the exit-and-return scene: the filter "saw" its target in
+    /// an empty background).
+    pub flat_bin: bool,
 }
 
-/// Capacity of an edge histogram: the most orientation bins an [`EdgeCue`] may ask for.
-pub const MAX_EDGE_BINS: usize = 16;
+/// Capacity of an edge histogram: 16 orientation bins, the most an
+/// [`EdgeCue`] may ask for, plus the flat bin.
+pub const MAX_EDGE_BINS: usize = 17;
 
 impl Default for Config {
-    /// The defaults: the first paper's filter (RGB 8x8x8, σ = 0.2, α = 0.1,
-    /// π_T = 0.15, b = 0.1) with the noise levels of the reference
-    /// implementation in DESIGN.md §5.
+    /// The defaults, chosen by the ablation over the five real sequences
+    /// (README, "Measured choices"): the first paper's filter (RGB 8x8x8,
+    /// α = 0.1, π_T = 0.15, b = 0.1) with the third paper's checkerboard,
+    /// Sobel edge cue (8 bins, threshold 100) and adaptive σ with a floor,
+    /// a per-region budget of 1000 samples, and damped velocities with wide
+    /// position noise.
     fn default() -> Self {
         Config {
             binning: Binning::Rgb8x8x8,
-            sampling: Sampling::Full,
-            max_samples: 0,
-            edges: None,
+            sampling: Sampling::Checkerboard,
+            max_samples: 1000,
+            edges: Some(EdgeCue { bins: 8, threshold: 100, flat_bin: false }),
             combination: Combination::Product,
-            likelihood: Likelihood {
-                sigma: Sigma::Fixed(0.2),
-                eps: 0.0,
-            },
+            likelihood: Likelihood { sigma: Sigma::Adaptive { min: 0.02, max: 0.5 }, eps: 0.005 },
             resampling: Resampling::Systematic,
             dynamics: Dynamics {
-                position_noise: 0.10,
-                velocity_noise: 0.05,
-                velocity_decay: 1.0,
+                position_noise: 0.2,
+                velocity_noise: 0.1,
+                velocity_decay: 0.5,
                 scale_noise: 0.01,
                 scale_rate_noise: 0.0,
             },
             alpha: 0.1,
             update_threshold: 0.15,
+            update_sigma: 0.3,
             appearance_sigmas: 2.0,
             min_appearance: 0.5,
             kickoff: 0.1,
@@ -118,30 +136,17 @@ impl Default for Config {
 
 fn check(field: &'static str, v: Real, lo: Real, hi: Real) -> Result<(), ConfigError> {
     if !v.is_finite() {
-        return Err(ConfigError {
-            field,
-            problem: ParamProblem::NonFinite,
-        });
+        return Err(ConfigError { field, problem: ParamProblem::NonFinite });
     }
     if !(v >= lo && v <= hi) {
-        return Err(ConfigError {
-            field,
-            problem: ParamProblem::OutOfRange,
-        });
+        return Err(ConfigError { field, problem: ParamProblem::OutOfRange });
     }
     Ok(())
 }
 
 fn positive(field: &'static str, v: Real, hi: Real) -> Result<(), ConfigError> {
     check(field, v, 0.0, hi)?;
-    if v > 0.0 {
-        Ok(())
-    } else {
-        Err(ConfigError {
-            field,
-            problem: ParamProblem::OutOfRange,
-        })
-    }
+    if v > 0.0 { Ok(()) } else { Err(ConfigError { field, problem: ParamProblem::OutOfRange }) }
 }
 
 impl Config {
@@ -153,10 +158,7 @@ impl Config {
                 positive("likelihood.sigma.min", min, 10.0)?;
                 positive("likelihood.sigma.max", max, 10.0)?;
                 if min > max {
-                    return Err(ConfigError {
-                        field: "likelihood.sigma.max",
-                        problem: ParamProblem::OutOfRange,
-                    });
+                    return Err(ConfigError { field: "likelihood.sigma.max", problem: ParamProblem::OutOfRange });
                 }
             }
         }
@@ -166,16 +168,10 @@ impl Config {
         }
         if let Some(e) = self.edges {
             if !matches!(e.bins, 2 | 4 | 8 | 16) {
-                return Err(ConfigError {
-                    field: "edges.bins",
-                    problem: ParamProblem::OutOfRange,
-                });
+                return Err(ConfigError { field: "edges.bins", problem: ParamProblem::OutOfRange });
             }
             if e.threshold > 1500 {
-                return Err(ConfigError {
-                    field: "edges.threshold",
-                    problem: ParamProblem::OutOfRange,
-                });
+                return Err(ConfigError { field: "edges.threshold", problem: ParamProblem::OutOfRange });
             }
         }
         let d = &self.dynamics;
@@ -186,22 +182,15 @@ impl Config {
         check("dynamics.scale_rate_noise", d.scale_rate_noise, 0.0, 0.1)?;
         check("alpha", self.alpha, 0.0, 1.0)?;
         check("update_threshold", self.update_threshold, 0.0, 1.0)?;
+        positive("update_sigma", self.update_sigma, 10.0)?;
         check("appearance_sigmas", self.appearance_sigmas, 0.0, 100.0)?;
         check("min_appearance", self.min_appearance, 0.0, 1.0)?;
         positive("kickoff", self.kickoff, 1.0)?;
         if self.lost_after == 0 || self.lost_after > 1000 {
-            return Err(ConfigError {
-                field: "lost_after",
-                problem: ParamProblem::OutOfRange,
-            });
+            return Err(ConfigError { field: "lost_after", problem: ParamProblem::OutOfRange });
         }
         check("reseed_fraction", self.reseed_fraction, 0.0, 1.0)?;
-        check(
-            "min_half_axis",
-            self.min_half_axis,
-            1.0,
-            (crate::frame::MAX_DIMENSION / 2) as Real,
-        )?;
+        check("min_half_axis", self.min_half_axis, 1.0, (crate::frame::MAX_DIMENSION / 2) as Real)?;
         Ok(())
     }
 }
@@ -219,69 +208,24 @@ mod tests {
     fn each_bad_field_is_named() {
         type Case = (fn(&mut Config), &'static str, ParamProblem);
         let cases: [Case; 15] = [
-            (
-                |c| c.combination = Combination::Weighted { colour: 1.5 },
-                "combination.colour",
-                ParamProblem::OutOfRange,
-            ),
-            (
-                |c| c.edges = Some(EdgeCue { bins: 7, threshold: 50 }),
-                "edges.bins",
-                ParamProblem::OutOfRange,
-            ),
-            (
-                |c| {
-                    c.edges = Some(EdgeCue {
-                        bins: 8,
-                        threshold: 9999,
-                    })
-                },
-                "edges.threshold",
-                ParamProblem::OutOfRange,
-            ),
-            (
-                |c| c.likelihood.sigma = Sigma::Fixed(0.0),
-                "likelihood.sigma",
-                ParamProblem::OutOfRange,
-            ),
-            (
-                |c| c.likelihood.sigma = Sigma::Fixed(-1.0),
-                "likelihood.sigma",
-                ParamProblem::OutOfRange,
-            ),
-            (
-                |c| c.likelihood.sigma = Sigma::Fixed(Real::INFINITY),
-                "likelihood.sigma",
-                ParamProblem::NonFinite,
-            ),
+            (|c| c.combination = Combination::Weighted { colour: 1.5 }, "combination.colour", ParamProblem::OutOfRange),
+            (|c| c.edges = Some(EdgeCue { bins: 7, threshold: 50, flat_bin: true }), "edges.bins", ParamProblem::OutOfRange),
+            (|c| c.edges = Some(EdgeCue { bins: 8, threshold: 9999, flat_bin: true }), "edges.threshold", ParamProblem::OutOfRange),
+            (|c| c.likelihood.sigma = Sigma::Fixed(0.0), "likelihood.sigma", ParamProblem::OutOfRange),
+            (|c| c.likelihood.sigma = Sigma::Fixed(-1.0), "likelihood.sigma", ParamProblem::OutOfRange),
+            (|c| c.likelihood.sigma = Sigma::Fixed(Real::INFINITY), "likelihood.sigma", ParamProblem::NonFinite),
             (
                 |c| c.likelihood.sigma = Sigma::Adaptive { min: 0.5, max: 0.1 },
                 "likelihood.sigma.max",
                 ParamProblem::OutOfRange,
             ),
-            (
-                |c| c.likelihood.eps = Real::NAN,
-                "likelihood.eps",
-                ParamProblem::NonFinite,
-            ),
-            (
-                |c| c.dynamics.position_noise = -0.1,
-                "dynamics.position_noise",
-                ParamProblem::OutOfRange,
-            ),
-            (
-                |c| c.dynamics.scale_noise = 1e9,
-                "dynamics.scale_noise",
-                ParamProblem::OutOfRange,
-            ),
+            (|c| c.likelihood.eps = Real::NAN, "likelihood.eps", ParamProblem::NonFinite),
+            (|c| c.dynamics.position_noise = -0.1, "dynamics.position_noise", ParamProblem::OutOfRange),
+            (|c| c.dynamics.scale_noise = 1e9, "dynamics.scale_noise", ParamProblem::OutOfRange),
             (|c| c.alpha = 1.5, "alpha", ParamProblem::OutOfRange),
             (|c| c.kickoff = 0.0, "kickoff", ParamProblem::OutOfRange),
             (|c| c.lost_after = 0, "lost_after", ParamProblem::OutOfRange),
-            (
-                |c| c.reseed_fraction = Real::NEG_INFINITY,
-                "reseed_fraction",
-                ParamProblem::NonFinite,
-            ),
+            (|c| c.reseed_fraction = Real::NEG_INFINITY, "reseed_fraction", ParamProblem::NonFinite),
             (|c| c.min_half_axis = 0.5, "min_half_axis", ParamProblem::OutOfRange),
         ];
         for (mutate, field, problem) in cases {

@@ -11,9 +11,6 @@
 //! histograms make, with no allocation and a bounded cost.
 
 use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
-use crate::geometry::Ellipse;
-use crate::histogram::Histogram;
-use crate::region::{Lattice, for_each_in_ellipse};
 
 /// Directions at `k · 11.25°` for `k = 0..16`, as `(cos, sin) · 4096`: the
 /// orientation bin boundaries for 2, 4, 8 or 16 bins over 0–180°.
@@ -36,20 +33,17 @@ const DIRECTIONS: [(i32, i32); 16] = [
     (-4017, 799),
 ];
 
-/// Map cell value of a pixel whose gradient is below the threshold (or that
-/// lies on the frame border, where the 3x3 Sobel window does not fit).
-const WEAK: u8 = u8::MAX;
+/// Map cell value of a pixel that counts in no bin: weak (unless weak
+/// pixels have a bin of their own), on the frame border where the 3x3 Sobel
+/// window does not fit, or not computed.
+const NONE: u8 = u8::MAX;
 
 /// The orientation bin of gradient `(gx, gy)` among `bins` equal sectors of
 /// 0–180°, by sector tests with integer cross products (no `atan`).
 /// `bins` must be 2, 4, 8 or 16.
 pub fn orientation_bin(gx: i32, gy: i32, bins: usize) -> usize {
     // Orientation is modulo 180°: fold into the upper half plane.
-    let (gx, gy) = if gy < 0 || (gy == 0 && gx < 0) {
-        (-gx, -gy)
-    } else {
-        (gx, gy)
-    };
+    let (gx, gy) = if gy < 0 || (gy == 0 && gx < 0) { (-gx, -gy) } else { (gx, gy) };
     let stride = 16 / bins.clamp(2, 16);
     // Bin = the number of boundaries at or clockwise of the gradient; the
     // boundaries are sorted by angle, so binary search.
@@ -76,6 +70,9 @@ pub struct EdgeParams {
     pub threshold: u16,
     /// The finest grid spacing worth computing, in pixels.
     pub min_spacing: usize,
+    /// Whether weak pixels count in a bin of their own (bin `bins`), so the
+    /// histogram also says how much of the region has edges at all.
+    pub flat_bin: bool,
 }
 
 /// A per-frame map of quantised edge orientations over a region of the
@@ -100,14 +97,7 @@ impl<const E: usize> Default for EdgeMap<E> {
 impl<const E: usize> EdgeMap<E> {
     /// An empty map (every lookup is weak).
     pub const fn new() -> Self {
-        EdgeMap {
-            cells: [WEAK; E],
-            x0: 0,
-            y0: 0,
-            cols: 0,
-            rows: 0,
-            shift: 0,
-        }
+        EdgeMap { cells: [NONE; E], x0: 0, y0: 0, cols: 0, rows: 0, shift: 0 }
     }
 
     /// Grid spacing in pixels: 1 when the region fits the buffer at full resolution.
@@ -130,11 +120,8 @@ impl<const E: usize> EdgeMap<E> {
     }
 
     fn compute_as<P: PixelRead>(&mut self, frame: &Frame<'_>, rect: (usize, usize, usize, usize), p: EdgeParams) {
-        let EdgeParams {
-            bins,
-            threshold,
-            min_spacing,
-        } = p;
+        let EdgeParams { bins, threshold, min_spacing, flat_bin } = p;
+        let weak = if flat_bin { bins.min(16) as u8 } else { NONE };
         let (x0, y0, x1, y1) = rect;
         let (w, h) = (frame.width(), frame.height());
         let (x0, y0) = (x0.min(w), y0.min(h));
@@ -151,14 +138,7 @@ impl<const E: usize> EdgeMap<E> {
         let cols = (x1 - x0).div_ceil(d).min(E);
         let rows = (y1 - y0).div_ceil(d);
         let rows = if cols == 0 { 0 } else { rows.min(E / cols) };
-        *self = EdgeMap {
-            cells: self.cells,
-            x0,
-            y0,
-            cols,
-            rows,
-            shift,
-        };
+        *self = EdgeMap { cells: self.cells, x0, y0, cols, rows, shift };
         let t2 = threshold as i32 * threshold as i32;
         let empty: &[u8] = &[];
         for j in 0..rows {
@@ -166,7 +146,7 @@ impl<const E: usize> EdgeMap<E> {
             let out = self.cells.get_mut(j * cols..(j + 1) * cols).unwrap_or_default();
             // The Sobel window needs rows y-1..=y+1: the border rows are weak.
             if y == 0 || y + 1 >= h {
-                out.fill(WEAK);
+                out.fill(NONE);
                 continue;
             }
             let rows3 = [y - 1, y, y + 1].map(|r| frame.row(r).unwrap_or(empty));
@@ -178,7 +158,7 @@ impl<const E: usize> EdgeMap<E> {
             for (i, cell) in out.iter_mut().enumerate() {
                 let x = x0 + i * d;
                 *cell = if x == 0 || x + 1 >= w {
-                    WEAK
+                    NONE
                 } else {
                     let cols3 = match window {
                         Some((px, [_, m, r])) if px + 1 == x => [m, r, column(x + 1)],
@@ -187,18 +167,16 @@ impl<const E: usize> EdgeMap<E> {
                     window = Some((x, cols3));
                     let [[a, dd, g], [b, _, hh], [c, f, k]] = cols3;
                     let (gx, gy) = sobel([a, b, c, dd, 0, f, g, hh, k]);
-                    if gx * gx + gy * gy < t2 {
-                        WEAK
-                    } else {
-                        orientation_bin(gx, gy, bins) as u8
-                    }
+                    if gx * gx + gy * gy < t2 { weak } else { orientation_bin(gx, gy, bins) as u8 }
                 };
             }
         }
     }
 
-    /// The orientation bin of the map cell nearest pixel `(x, y)`, or `None`
-    /// for a weak edge or a pixel outside the mapped region.
+    /// The bin of the map cell nearest pixel `(x, y)`: its orientation, or
+    /// the flat bin (`bins`) for a weak gradient when there is one; `None` for
+    /// a weak gradient without a flat bin, the frame border, or a pixel
+    /// outside the mapped region.
     #[inline(always)]
     pub fn bin_at(&self, x: usize, y: usize) -> Option<usize> {
         let i = x.checked_sub(self.x0)? >> self.shift;
@@ -207,26 +185,9 @@ impl<const E: usize> EdgeMap<E> {
             return None;
         }
         match self.cells.get(j * self.cols + i) {
-            Some(&v) if v != WEAK => Some(v as usize),
+            Some(&v) if v != NONE => Some(v as usize),
             _ => None,
         }
-    }
-
-    /// Replaces `hist` with the edge-orientation histogram of ellipse `e`,
-    /// with the same kernel weights and lattice as the colour histogram.
-    pub(crate) fn histogram<const B: usize>(
-        &self,
-        frame: &Frame<'_>,
-        e: &Ellipse,
-        lattice: Lattice,
-        hist: &mut Histogram<B>,
-    ) {
-        hist.clear();
-        for_each_in_ellipse(frame, e, lattice, |_, x, y, w| {
-            if let Some(bin) = self.bin_at(x, y) {
-                hist.add(bin, w);
-            }
-        });
     }
 }
 
@@ -242,7 +203,9 @@ pub fn sobel(p: [i32; 9]) -> (i32, i32) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::region::Sampling;
+    use crate::geometry::Ellipse;
+    use crate::histogram::Histogram;
+    use crate::region::{Lattice, Sampling, for_each_in_ellipse};
 
     #[test]
     fn sobel_on_a_hand_computed_patch() {
@@ -266,10 +229,7 @@ mod tests {
             let width = 180.0 / bins as f64;
             for k in 0..bins {
                 let theta = (k as f64 + 0.5) * width;
-                let (gx, gy) = (
-                    (1000.0 * theta.to_radians().cos()) as i32,
-                    (1000.0 * theta.to_radians().sin()) as i32,
-                );
+                let (gx, gy) = ((1000.0 * theta.to_radians().cos()) as i32, (1000.0 * theta.to_radians().sin()) as i32);
                 assert_eq!(orientation_bin(gx, gy, bins), k, "{bins} bins, {theta}°");
                 assert_eq!(orientation_bin(-gx, -gy, bins), k, "{bins} bins, {theta}° + 180°");
             }
@@ -299,36 +259,17 @@ mod tests {
             let px = stripes(40, 40, vertical);
             let f = Frame::packed(&px, 40, 40, PixelFormat::Gray8).unwrap();
             let mut map = EdgeMap::<2048>::new();
-            map.compute(
-                &f,
-                (0, 0, 40, 40),
-                EdgeParams {
-                    bins: 8,
-                    threshold: 50,
-                    min_spacing: 1,
-                },
-            );
+            map.compute(&f, (0, 0, 40, 40), EdgeParams { bins: 8, threshold: 50, min_spacing: 1, flat_bin: false });
             assert_eq!(map.spacing(), 1);
             let mut h = Histogram::<16>::new();
             let l = Lattice::new(Sampling::Full, 0, 10.0, 10.0);
-            map.histogram(
-                &f,
-                &Ellipse {
-                    cx: 20.0,
-                    cy: 20.0,
-                    hx: 10.0,
-                    hy: 10.0,
-                },
-                l,
-                &mut h,
-            );
+            for_each_in_ellipse(&f, &Ellipse { cx: 20.0, cy: 20.0, hx: 10.0, hy: 10.0 }, l, |_, x, y, w| {
+                if let Some(bin) = map.bin_at(x, y) {
+                    h.add(bin, w);
+                }
+            });
             assert!(h.total() > 0);
-            assert_eq!(
-                h.counts()[want],
-                h.total(),
-                "vertical={vertical}: {:?}",
-                &h.counts()[..8]
-            );
+            assert_eq!(h.counts()[want], h.total(), "vertical={vertical}: {:?}", &h.counts()[..8]);
         }
     }
 
@@ -349,15 +290,7 @@ mod tests {
         for spacing in [1usize, 2, 4] {
             let mut map = EdgeMap::<4096>::new();
             let (x0, y0) = (3usize, 2usize);
-            map.compute(
-                &f,
-                (x0, y0, w, h),
-                EdgeParams {
-                    bins: 8,
-                    threshold: 120,
-                    min_spacing: spacing,
-                },
-            );
+            map.compute(&f, (x0, y0, w, h), EdgeParams { bins: 8, threshold: 120, min_spacing: spacing, flat_bin: false });
             assert_eq!(map.spacing(), spacing);
             for y in (y0..h).step_by(spacing) {
                 for x in (x0..w).step_by(spacing) {
@@ -390,52 +323,23 @@ mod tests {
         let f = Frame::packed(&flat, 64, 64, PixelFormat::Gray8).unwrap();
         let mut map = EdgeMap::<256>::new();
         // 64x64 = 4096 pixels into 256 cells: spacing 4.
-        map.compute(
-            &f,
-            (0, 0, 64, 64),
-            EdgeParams {
-                bins: 8,
-                threshold: 1,
-                min_spacing: 1,
-            },
-        );
+        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 1, min_spacing: 1, flat_bin: false });
         assert_eq!(map.spacing(), 4);
         assert_eq!(map.bin_at(30, 30), None, "a flat frame has no edges");
         assert_eq!(map.bin_at(100, 30), None, "outside the frame");
         // Stripes 2 grey levels apart: a gradient of 8, under a threshold of 10.
-        let faint: Vec<u8> = (0..64 * 64)
-            .map(|i| if (i % 64) / 4 % 2 == 0 { 100 } else { 102 })
-            .collect();
+        let faint: Vec<u8> = (0..64 * 64).map(|i| if (i % 64) / 4 % 2 == 0 { 100 } else { 102 }).collect();
         let f = Frame::packed(&faint, 64, 64, PixelFormat::Gray8).unwrap();
-        map.compute(
-            &f,
-            (0, 0, 64, 64),
-            EdgeParams {
-                bins: 8,
-                threshold: 10,
-                min_spacing: 1,
-            },
-        );
+        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 10, min_spacing: 1, flat_bin: false });
         assert!((0..64).all(|x| map.bin_at(x, 30).is_none()));
-        map.compute(
-            &f,
-            (0, 0, 64, 64),
-            EdgeParams {
-                bins: 8,
-                threshold: 5,
-                min_spacing: 3,
-            },
-        );
+        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 5, min_spacing: 3, flat_bin: false });
         assert_eq!(map.spacing(), 4, "budget 256 cells still rules");
-        map.compute(
-            &f,
-            (0, 0, 64, 64),
-            EdgeParams {
-                bins: 8,
-                threshold: 5,
-                min_spacing: 1,
-            },
-        );
+        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 5, min_spacing: 1, flat_bin: false });
         assert!((0..64).any(|x| map.bin_at(x, 30).is_some()));
+        // With a flat bin, the weak pixels are counted there (bin 8 of 8 + 1).
+        // The map's cells are 4 px apart; those of x < 4 sit on the border.
+        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 10, min_spacing: 1, flat_bin: true });
+        assert!((4..64).all(|x| map.bin_at(x, 30) == Some(8)));
+        assert_eq!(map.bin_at(0, 30), None, "the border has no Sobel window");
     }
 }

@@ -114,11 +114,9 @@ impl fmt::Display for FrameError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
             FrameError::ZeroSize => write!(f, "frame width or height is zero"),
-            FrameError::TooLarge { width, height } => write!(
-                f,
-                "frame {width}x{height} exceeds the maximum of {0}x{0}",
-                crate::frame::MAX_DIMENSION
-            ),
+            FrameError::TooLarge { width, height } => {
+                write!(f, "frame {width}x{height} exceeds the maximum of {0}x{0}", crate::frame::MAX_DIMENSION)
+            }
             FrameError::StrideTooSmall { stride, row_bytes } => {
                 write!(f, "stride {stride} is shorter than a row of {row_bytes} bytes")
             }

@@ -29,23 +29,12 @@ pub struct Particle {
 impl Particle {
     /// A particle at rest on an ellipse.
     pub fn at(e: &Ellipse) -> Self {
-        Particle {
-            x: e.cx,
-            y: e.cy,
-            hx: e.hx,
-            hy: e.hy,
-            ..Default::default()
-        }
+        Particle { x: e.cx, y: e.cy, hx: e.hx, hy: e.hy, ..Default::default() }
     }
 
     /// The particle's ellipse.
     pub fn ellipse(&self) -> Ellipse {
-        Ellipse {
-            cx: self.x,
-            cy: self.y,
-            hx: self.hx,
-            hy: self.hy,
-        }
+        Ellipse { cx: self.x, cy: self.y, hx: self.hx, hy: self.hy }
     }
 }
 
@@ -184,11 +173,7 @@ pub(crate) fn resample<R: Rng, const N: usize>(
 
 /// The weighted mean state `E[S] = Σ π_i s_i` for normalised weights.
 pub(crate) fn mean_state<const N: usize>(particles: &[Particle; N], weights: &[Real; N]) -> Particle {
-    let mut m = Particle {
-        hx: 0.0,
-        hy: 0.0,
-        ..Default::default()
-    };
+    let mut m = Particle { hx: 0.0, hy: 0.0, ..Default::default() };
     for (p, &w) in particles.iter().zip(weights.iter()) {
         m.x += w * p.x;
         m.y += w * p.y;
@@ -208,11 +193,7 @@ mod tests {
     use rand_xoshiro::Xoshiro128PlusPlus;
 
     fn bounds() -> Bounds {
-        Bounds {
-            width: 1000.0,
-            height: 1000.0,
-            min_half: 1.0,
-        }
+        Bounds { width: 1000.0, height: 1000.0, min_half: 1.0 }
     }
 
     #[test]
@@ -226,15 +207,7 @@ mod tests {
             scale_noise: 0.0,
             scale_rate_noise: 0.0,
         };
-        let mut p = Particle {
-            x: 100.0,
-            y: 200.0,
-            vx: 3.0,
-            vy: -2.0,
-            hx: 10.0,
-            hy: 20.0,
-            a_dot: 0.05,
-        };
+        let mut p = Particle { x: 100.0, y: 200.0, vx: 3.0, vy: -2.0, hx: 10.0, hy: 20.0, a_dot: 0.05 };
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(1);
         for _ in 0..10 {
             d.propagate(&mut p, &bounds(), &mut rng);
@@ -260,14 +233,7 @@ mod tests {
         let n = 20_000;
         let (mut s1, mut s2) = (0.0f64, 0.0f64);
         for _ in 0..n {
-            let mut p = Particle {
-                x: 500.0,
-                y: 500.0,
-                vx: 1.0,
-                hx: 10.0,
-                hy: 10.0,
-                ..Default::default()
-            };
+            let mut p = Particle { x: 500.0, y: 500.0, vx: 1.0, hx: 10.0, hy: 10.0, ..Default::default() };
             d.propagate(&mut p, &bounds(), &mut rng);
             let dx = (p.x - 501.0) as f64;
             s1 += dx;
@@ -288,25 +254,14 @@ mod tests {
             scale_noise: 0.0,
             scale_rate_noise: 0.0,
         };
-        let mut p = Particle {
-            x: 5.0,
-            y: 5.0,
-            vx: -10.0,
-            vy: 0.0,
-            hx: 4.0,
-            hy: 4.0,
-            a_dot: 0.0,
-        };
+        let mut p = Particle { x: 5.0, y: 5.0, vx: -10.0, vy: 0.0, hx: 4.0, hy: 4.0, a_dot: 0.0 };
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(1);
         d.propagate(&mut p, &bounds(), &mut rng);
         assert_eq!((p.x, p.vx), (0.0, 0.0));
     }
 
     fn line_particles<const N: usize>() -> [Particle; N] {
-        core::array::from_fn(|i| Particle {
-            x: i as Real,
-            ..Default::default()
-        })
+        core::array::from_fn(|i| Particle { x: i as Real, ..Default::default() })
     }
 
     #[test]

@@ -113,34 +113,16 @@ impl<'a> Frame<'a> {
         let needed = stride
             .checked_mul(height - 1)
             .and_then(|b| b.checked_add(row_bytes))
-            .ok_or(FrameError::BufferTooSmall {
-                needed: usize::MAX,
-                got: data.len(),
-            })?;
+            .ok_or(FrameError::BufferTooSmall { needed: usize::MAX, got: data.len() })?;
         if data.len() < needed {
-            return Err(FrameError::BufferTooSmall {
-                needed,
-                got: data.len(),
-            });
+            return Err(FrameError::BufferTooSmall { needed, got: data.len() });
         }
-        Ok(Frame {
-            data,
-            width,
-            height,
-            stride,
-            format,
-        })
+        Ok(Frame { data, width, height, stride, format })
     }
 
     /// A tightly packed frame: the stride is `width * bytes_per_pixel`.
     pub fn packed(data: &'a [u8], width: usize, height: usize, format: PixelFormat) -> Result<Self, FrameError> {
-        Self::new(
-            data,
-            width,
-            height,
-            width.saturating_mul(format.bytes_per_pixel()),
-            format,
-        )
+        Self::new(data, width, height, width.saturating_mul(format.bytes_per_pixel()), format)
     }
 
     /// Width in pixels.
@@ -303,16 +285,10 @@ mod tests {
     #[test]
     fn rejects_inconsistent_dimensions() {
         let buf = [0u8; 100];
-        assert_eq!(
-            Frame::new(&buf, 0, 2, 8, PixelFormat::Gray8).err(),
-            Some(FrameError::ZeroSize)
-        );
+        assert_eq!(Frame::new(&buf, 0, 2, 8, PixelFormat::Gray8).err(), Some(FrameError::ZeroSize));
         assert_eq!(
             Frame::new(&buf, 5, 2, 8, PixelFormat::Rgb565).err(),
-            Some(FrameError::StrideTooSmall {
-                stride: 8,
-                row_bytes: 10
-            })
+            Some(FrameError::StrideTooSmall { stride: 8, row_bytes: 10 })
         );
         assert_eq!(
             Frame::new(&buf, 10, 10, 10, PixelFormat::Gray8).err(),
@@ -323,14 +299,8 @@ mod tests {
             Frame::new(&buf, 10, 11, 10, PixelFormat::Gray8).err(),
             Some(FrameError::BufferTooSmall { needed: 110, got: 100 })
         );
-        assert_eq!(
-            Frame::new(&buf, 3, 1, 8, PixelFormat::Yuv422).err(),
-            Some(FrameError::OddYuvWidth { width: 3 })
-        );
-        assert!(matches!(
-            Frame::new(&buf, 5000, 1, 5000, PixelFormat::Gray8),
-            Err(FrameError::TooLarge { .. })
-        ));
+        assert_eq!(Frame::new(&buf, 3, 1, 8, PixelFormat::Yuv422).err(), Some(FrameError::OddYuvWidth { width: 3 }));
+        assert!(matches!(Frame::new(&buf, 5000, 1, 5000, PixelFormat::Gray8), Err(FrameError::TooLarge { .. })));
         // A stride so large that stride * (height - 1) overflows.
         assert!(matches!(
             Frame::new(&buf, 1, 3, usize::MAX / 2 + 1, PixelFormat::Gray8),

@@ -40,11 +40,7 @@ impl BoundingBox {
 
     /// Area, or 0 for an empty box.
     pub fn area(&self) -> Real {
-        if self.width > 0.0 && self.height > 0.0 {
-            self.width * self.height
-        } else {
-            0.0
-        }
+        if self.width > 0.0 && self.height > 0.0 { self.width * self.height } else { 0.0 }
     }
 
     /// Intersection over union, in `[0, 1]` (0 when either box is empty).
@@ -56,11 +52,7 @@ impl BoundingBox {
         }
         let inter = ix * iy;
         let union = self.area() + other.area() - inter;
-        if union > 0.0 {
-            (inter / union).clamp(0.0, 1.0)
-        } else {
-            0.0
-        }
+        if union > 0.0 { (inter / union).clamp(0.0, 1.0) } else { 0.0 }
     }
 
     /// Checks that the box is usable as a target in a `width × height` frame:
@@ -106,12 +98,7 @@ impl Ellipse {
     /// The ellipse inscribed in a box.
     pub fn from_box(b: &BoundingBox) -> Self {
         let (cx, cy) = b.centre();
-        Ellipse {
-            cx,
-            cy,
-            hx: 0.5 * b.width,
-            hy: 0.5 * b.height,
-        }
+        Ellipse { cx, cy, hx: 0.5 * b.width, hy: 0.5 * b.height }
     }
 
     /// The box the ellipse is inscribed in.
@@ -130,34 +117,13 @@ mod tests {
         assert_eq!(ok.validate(100, 100), Ok(()));
         // Partly outside on the left: accepted, 5 px of it are inside.
         assert_eq!(BoundingBox::new(-15.0, 10.0, 20.0, 20.0).validate(100, 100), Ok(()));
-        assert_eq!(
-            BoundingBox::new(0.0, 0.0, 0.0, 5.0).validate(100, 100),
-            Err(RegionError::EmptyBox)
-        );
-        assert_eq!(
-            BoundingBox::new(0.0, 0.0, -3.0, 5.0).validate(100, 100),
-            Err(RegionError::EmptyBox)
-        );
-        assert_eq!(
-            BoundingBox::new(Real::NAN, 0.0, 3.0, 5.0).validate(100, 100),
-            Err(RegionError::NonFinite)
-        );
-        assert_eq!(
-            BoundingBox::new(0.0, 0.0, Real::INFINITY, 5.0).validate(100, 100),
-            Err(RegionError::NonFinite)
-        );
-        assert_eq!(
-            BoundingBox::new(0.0, 0.0, 101.0, 5.0).validate(100, 100),
-            Err(RegionError::LargerThanFrame)
-        );
-        assert_eq!(
-            BoundingBox::new(100.0, 0.0, 5.0, 5.0).validate(100, 100),
-            Err(RegionError::OutsideFrame)
-        );
-        assert_eq!(
-            BoundingBox::new(-5.0, 0.0, 5.0, 5.0).validate(100, 100),
-            Err(RegionError::OutsideFrame)
-        );
+        assert_eq!(BoundingBox::new(0.0, 0.0, 0.0, 5.0).validate(100, 100), Err(RegionError::EmptyBox));
+        assert_eq!(BoundingBox::new(0.0, 0.0, -3.0, 5.0).validate(100, 100), Err(RegionError::EmptyBox));
+        assert_eq!(BoundingBox::new(Real::NAN, 0.0, 3.0, 5.0).validate(100, 100), Err(RegionError::NonFinite));
+        assert_eq!(BoundingBox::new(0.0, 0.0, Real::INFINITY, 5.0).validate(100, 100), Err(RegionError::NonFinite));
+        assert_eq!(BoundingBox::new(0.0, 0.0, 101.0, 5.0).validate(100, 100), Err(RegionError::LargerThanFrame));
+        assert_eq!(BoundingBox::new(100.0, 0.0, 5.0, 5.0).validate(100, 100), Err(RegionError::OutsideFrame));
+        assert_eq!(BoundingBox::new(-5.0, 0.0, 5.0, 5.0).validate(100, 100), Err(RegionError::OutsideFrame));
     }
 
     #[test]

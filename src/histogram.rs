@@ -33,10 +33,7 @@ impl<const K: usize> Default for Histogram<K> {
 impl<const K: usize> Histogram<K> {
     /// An empty histogram.
     pub const fn new() -> Self {
-        Histogram {
-            counts: [0; K],
-            total: 0,
-        }
+        Histogram { counts: [0; K], total: 0 }
     }
 
     /// The raw weighted counts.
@@ -85,19 +82,43 @@ impl<const K: usize> Histogram<K> {
 
     /// [`Histogram::compute`] on an explicit lattice.
     pub(crate) fn compute_on(&mut self, frame: &Frame<'_>, e: &Ellipse, binning: Binning, lattice: Lattice) {
+        self.compute_with(frame, e, binning, lattice, |_, _, _| {});
+    }
+
+    /// [`Histogram::compute_on`], also calling `also(x, y, weight)` for every
+    /// sample: other cues ride on the same walk over the region instead of
+    /// repeating it.
+    #[inline(always)]
+    pub(crate) fn compute_with<F: FnMut(usize, usize, u32)>(
+        &mut self,
+        frame: &Frame<'_>,
+        e: &Ellipse,
+        binning: Binning,
+        lattice: Lattice,
+        also: F,
+    ) {
         self.clear();
         match frame.format() {
-            PixelFormat::Rgb565 => self.accumulate::<Rgb565>(frame, e, binning, lattice),
-            PixelFormat::Rgb888 => self.accumulate::<Rgb888>(frame, e, binning, lattice),
-            PixelFormat::Yuv422 => self.accumulate::<Yuv422>(frame, e, binning, lattice),
-            PixelFormat::Gray8 => self.accumulate::<Gray8>(frame, e, binning, lattice),
+            PixelFormat::Rgb565 => self.accumulate::<Rgb565, F>(frame, e, binning, lattice, also),
+            PixelFormat::Rgb888 => self.accumulate::<Rgb888, F>(frame, e, binning, lattice, also),
+            PixelFormat::Yuv422 => self.accumulate::<Yuv422, F>(frame, e, binning, lattice, also),
+            PixelFormat::Gray8 => self.accumulate::<Gray8, F>(frame, e, binning, lattice, also),
         }
     }
 
-    fn accumulate<P: PixelRead>(&mut self, frame: &Frame<'_>, e: &Ellipse, binning: Binning, lattice: Lattice) {
+    #[inline(always)]
+    fn accumulate<P: PixelRead, F: FnMut(usize, usize, u32)>(
+        &mut self,
+        frame: &Frame<'_>,
+        e: &Ellipse,
+        binning: Binning,
+        lattice: Lattice,
+        mut also: F,
+    ) {
         let counts = &mut self.counts;
         let mut total = 0u32;
-        for_each_in_ellipse(frame, e, lattice, |row, x, _, w| {
+        for_each_in_ellipse(frame, e, lattice, |row, x, y, w| {
+            also(x, y, w);
             if let Some(rgb) = P::rgb(row, x)
                 && let Some(c) = counts.get_mut(binning.bin(rgb))
             {
@@ -130,10 +151,7 @@ impl<const K: usize> Model<K> {
         if h.total == 0 {
             return None;
         }
-        let mut m = Model {
-            q: [0; K],
-            sqrt_q: [0; K],
-        };
+        let mut m = Model { q: [0; K], sqrt_q: [0; K] };
         for (q, &c) in m.q.iter_mut().zip(h.counts.iter()) {
             *q = normalised(c, h.total);
         }
@@ -190,11 +208,7 @@ impl<const K: usize> Model<K> {
         }
         // Σ 16·sqrt(c) · 4096·sqrt(q) / (16·sqrt(C) · 4096)
         let denom = sqrt_q4(h.total) as Real * 4096.0;
-        if denom > 0.0 {
-            (sum as Real / denom).clamp(0.0, 1.0)
-        } else {
-            0.0
-        }
+        if denom > 0.0 { (sum as Real / denom).clamp(0.0, 1.0) } else { 0.0 }
     }
 }
 
@@ -227,12 +241,7 @@ mod tests {
             *p = (i * 37 % 251) as u8;
         }
         let f = Frame::packed(&buf, 64, 64, PixelFormat::Rgb888).unwrap();
-        let e = Ellipse {
-            cx: 30.0,
-            cy: 33.0,
-            hx: 12.0,
-            hy: 9.0,
-        };
+        let e = Ellipse { cx: 30.0, cy: 33.0, hx: 12.0, hy: 9.0 };
         for sampling in [Sampling::Full, Sampling::Checkerboard, Sampling::Quarter] {
             for binning in [Binning::Rgb8x8x8, Binning::Hsv8x8x4] {
                 let mut h = Histogram::<512>::new();
@@ -240,14 +249,9 @@ mod tests {
                 let sum: u64 = h.counts().iter().map(|&c| c as u64).sum();
                 assert_eq!(sum, h.total() as u64);
                 let mut mass = 0u64;
-                for_each_in_ellipse(&f, &e, Lattice::new(sampling, 0, e.hx, e.hy), |_, _, _, w| {
-                    mass += w as u64
-                });
+                for_each_in_ellipse(&f, &e, Lattice::new(sampling, 0, e.hx, e.hy), |_, _, _, w| mass += w as u64);
                 assert_eq!(sum, mass);
-                assert!(
-                    h.counts()[binning.bins()..].iter().all(|&c| c == 0),
-                    "bins past {binning:?}'s range"
-                );
+                assert!(h.counts()[binning.bins()..].iter().all(|&c| c == 0), "bins past {binning:?}'s range");
                 // A model made from it sums to 1 within the rounding of 512 bins.
                 let m = Model::from_histogram(&h).unwrap();
                 let qsum: i64 = m.bins().iter().map(|&q| q as i64).sum();
@@ -267,20 +271,11 @@ mod tests {
             for x in 0..w {
                 let fx = x as f32 / w as f32;
                 let fy = y as f32 / h as f32;
-                buf.extend_from_slice(&[
-                    (255.0 * fx) as u8,
-                    (255.0 * fy) as u8,
-                    (128.0 + 100.0 * (fx - fy)) as u8,
-                ]);
+                buf.extend_from_slice(&[(255.0 * fx) as u8, (255.0 * fy) as u8, (128.0 + 100.0 * (fx - fy)) as u8]);
             }
         }
         let f = Frame::packed(&buf, w, h, PixelFormat::Rgb888).unwrap();
-        let e = Ellipse {
-            cx: 60.0,
-            cy: 45.0,
-            hx: 30.0,
-            hy: 25.0,
-        };
+        let e = Ellipse { cx: 60.0, cy: 45.0, hx: 30.0, hy: 25.0 };
         let mut full = Histogram::<512>::new();
         full.compute(&f, &e, Binning::Rgb8x8x8, Sampling::Full);
         let m = Model::from_histogram(&full).unwrap();
@@ -295,11 +290,7 @@ mod tests {
 
     fn reference_rho(p: &Histogram<512>, q: &Histogram<512>) -> f64 {
         let (tp, tq) = (p.total() as f64, q.total() as f64);
-        p.counts()
-            .iter()
-            .zip(q.counts().iter())
-            .map(|(&a, &b)| ((a as f64 / tp) * (b as f64 / tq)).sqrt())
-            .sum()
+        p.counts().iter().zip(q.counts().iter()).map(|(&a, &b)| ((a as f64 / tp) * (b as f64 / tq)).sqrt()).sum()
     }
 
     #[test]

@@ -94,10 +94,7 @@ mod tests {
     #[test]
     fn adaptive_sigma_gives_best_particle_log_l_minus_one() {
         // Reason: σ² = d_min²/2 makes d_min²/(2σ²) exactly 1 (paper 3, eq. 24).
-        let l = Likelihood {
-            sigma: Sigma::Adaptive { min: 0.01, max: 1.0 },
-            eps: 0.0,
-        };
+        let l = Likelihood { sigma: Sigma::Adaptive { min: 0.01, max: 1.0 }, eps: 0.0 };
         for d2 in [0.01f32, 0.05, 0.2, 0.6] {
             let s = l.sigma_for(d2);
             let w = l.weight(d2, s);
@@ -125,10 +122,7 @@ mod tests {
     #[test]
     fn fixed_sigma_and_floor() {
         // Reason: hand values: d² = 0.08, σ = 0.2 gives exp(−1) = 0.3679.
-        let l = Likelihood {
-            sigma: Sigma::Fixed(0.2),
-            eps: 0.01,
-        };
+        let l = Likelihood { sigma: Sigma::Fixed(0.2), eps: 0.01 };
         assert_eq!(l.sigma_for(0.5), 0.2);
         assert!((l.weight(0.08, 0.2) - (0.36788 + 0.01)).abs() < 1e-4);
         // A hopeless particle still has the floor.

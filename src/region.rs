@@ -144,11 +144,7 @@ pub(crate) fn for_each_in_ellipse<F: FnMut(&[u8], usize, usize, u32)>(
     let mut y = y_lo;
     while y <= y_hi {
         let dy = y.abs_diff(r.cy);
-        let Some(ry2) = dy
-            .checked_mul(dy)
-            .and_then(|d| d.checked_mul(r.ay))
-            .filter(|&v| v < one)
-        else {
+        let Some(ry2) = dy.checked_mul(dy).and_then(|d| d.checked_mul(r.ay)).filter(|&v| v < one) else {
             y += s;
             continue;
         };
@@ -158,11 +154,8 @@ pub(crate) fn for_each_in_ellipse<F: FnMut(&[u8], usize, usize, u32)>(
         let x_lo = (r.cx - dx_max).max(0);
         let x_hi = (r.cx + dx_max).min(width - 1);
         // On a checkerboard of s-sized cells, odd cell rows start one cell in.
-        let (mut x, x_step) = if lattice.checker {
-            (align_up(x_lo, 2 * s, ((y / s) % 2) * s), 2 * s)
-        } else {
-            (align_up(x_lo, s, 0), s)
-        };
+        let (mut x, x_step) =
+            if lattice.checker { (align_up(x_lo, 2 * s, ((y / s) % 2) * s), 2 * s) } else { (align_up(x_lo, s, 0), s) };
         if let Some(row) = frame.row(y as usize) {
             while x <= x_hi {
                 let dx = x.abs_diff(r.cx);
@@ -207,20 +200,12 @@ mod tests {
         let buf = vec![0u8; 200 * 200];
         let f = Frame::packed(&buf, 200, 200, PixelFormat::Gray8).unwrap();
         for (a, b) in [(20.0f32, 20.0f32), (30.0, 12.0), (7.0, 15.0)] {
-            let e = Ellipse {
-                cx: 100.0,
-                cy: 100.0,
-                hx: a,
-                hy: b,
-            };
+            let e = Ellipse { cx: 100.0, cy: 100.0, hx: a, hy: b };
             let (n, mass) = count(&f, &e, lattice(Sampling::Full));
             let area = core::f64::consts::PI * a as f64 * b as f64;
             assert!((n as f64 - area).abs() / area < 0.05, "{a}x{b}: {n} px vs {area}");
             let want_mass = 256.0 * area / 2.0;
-            assert!(
-                (mass as f64 - want_mass).abs() / want_mass < 0.05,
-                "{a}x{b}: mass {mass} vs {want_mass}"
-            );
+            assert!((mass as f64 - want_mass).abs() / want_mass < 0.05, "{a}x{b}: mass {mass} vs {want_mass}");
 
             // Reason: checkerboard reads every other pixel, quarter one in four,
             // and both spread evenly, so the kernel mass scales the same way.
@@ -238,18 +223,11 @@ mod tests {
         // Reason: the definition, pixel by pixel.
         let buf = vec![0u8; 50 * 50];
         let f = Frame::packed(&buf, 50, 50, PixelFormat::Gray8).unwrap();
-        let e = Ellipse {
-            cx: 25.0,
-            cy: 25.0,
-            hx: 9.0,
-            hy: 6.0,
-        };
+        let e = Ellipse { cx: 25.0, cy: 25.0, hx: 9.0, hy: 6.0 };
         let mut full = Vec::new();
         for_each_in_ellipse(&f, &e, lattice(Sampling::Full), |_, x, y, _| full.push((x, y)));
         let mut checker = Vec::new();
-        for_each_in_ellipse(&f, &e, lattice(Sampling::Checkerboard), |_, x, y, _| {
-            checker.push((x, y))
-        });
+        for_each_in_ellipse(&f, &e, lattice(Sampling::Checkerboard), |_, x, y, _| checker.push((x, y)));
         let want: Vec<_> = full.iter().copied().filter(|(x, y)| (x + y) % 2 == 0).collect();
         assert_eq!(checker, want);
         let mut quarter = Vec::new();
@@ -265,12 +243,7 @@ mod tests {
         // under), while a small region keeps its base lattice untouched.
         let buf = vec![0u8; 200 * 200];
         let f = Frame::packed(&buf, 200, 200, PixelFormat::Gray8).unwrap();
-        let e = Ellipse {
-            cx: 100.0,
-            cy: 100.0,
-            hx: 60.0,
-            hy: 50.0,
-        };
+        let e = Ellipse { cx: 100.0, cy: 100.0, hx: 60.0, hy: 50.0 };
         for s in [Sampling::Full, Sampling::Checkerboard, Sampling::Quarter] {
             let l = Lattice::new(s, 500, e.hx, e.hy);
             let (n, _) = count(&f, &e, l);
@@ -287,73 +260,14 @@ mod tests {
         let buf = vec![0u8; 100 * 100];
         let f = Frame::packed(&buf, 100, 100, PixelFormat::Gray8).unwrap();
         let full = lattice(Sampling::Full);
-        let inside = count(
-            &f,
-            &Ellipse {
-                cx: 50.0,
-                cy: 50.0,
-                hx: 10.0,
-                hy: 10.0,
-            },
-            full,
-        )
-        .0;
-        let edge = count(
-            &f,
-            &Ellipse {
-                cx: 0.0,
-                cy: 50.0,
-                hx: 10.0,
-                hy: 10.0,
-            },
-            full,
-        )
-        .0;
+        let inside = count(&f, &Ellipse { cx: 50.0, cy: 50.0, hx: 10.0, hy: 10.0 }, full).0;
+        let edge = count(&f, &Ellipse { cx: 0.0, cy: 50.0, hx: 10.0, hy: 10.0 }, full).0;
         let frac = edge as f64 / inside as f64;
         assert!(frac > 0.5 && frac < 0.6, "{edge} of {inside}");
         // Entirely outside: nothing, and no panic.
-        assert_eq!(
-            count(
-                &f,
-                &Ellipse {
-                    cx: -50.0,
-                    cy: 50.0,
-                    hx: 10.0,
-                    hy: 10.0
-                },
-                full
-            )
-            .0,
-            0
-        );
-        assert_eq!(
-            count(
-                &f,
-                &Ellipse {
-                    cx: Real::NAN,
-                    cy: 50.0,
-                    hx: 10.0,
-                    hy: 10.0
-                },
-                full
-            )
-            .0,
-            0
-        );
+        assert_eq!(count(&f, &Ellipse { cx: -50.0, cy: 50.0, hx: 10.0, hy: 10.0 }, full).0, 0);
+        assert_eq!(count(&f, &Ellipse { cx: Real::NAN, cy: 50.0, hx: 10.0, hy: 10.0 }, full).0, 0);
         // A degenerate ellipse still reads its centre pixel.
-        assert_eq!(
-            count(
-                &f,
-                &Ellipse {
-                    cx: 5.5,
-                    cy: 5.5,
-                    hx: 0.0,
-                    hy: 0.0
-                },
-                full
-            )
-            .0,
-            1
-        );
+        assert_eq!(count(&f, &Ellipse { cx: 5.5, cy: 5.5, hx: 0.0, hy: 0.0 }, full).0, 1);
     }
 }

@@ -103,11 +103,7 @@ pub fn normal_from_bits(bits: u64) -> Real {
 /// The four extra fractional bits keep small histogram bins (a single pixel
 /// near the ellipse rim) from being rounded to nothing.
 pub fn sqrt_q4(x: u32) -> u32 {
-    if x < (1 << 24) {
-        (x << 8).isqrt()
-    } else {
-        x.isqrt() << 4
-    }
+    if x < (1 << 24) { (x << 8).isqrt() } else { x.isqrt() << 4 }
 }
 
 #[cfg(test)]
@@ -153,20 +149,7 @@ mod tests {
         // Reason: 16*sqrt(x) rounded down, compared with the f64 value; the
         // large-x branch drops up to 4 fractional bits, i.e. < 16 units of 2^-4,
         // which is below 1e-3 relative for x >= 2^24.
-        for x in [
-            0u32,
-            1,
-            2,
-            3,
-            255,
-            256,
-            1000,
-            65_535,
-            (1 << 24) - 1,
-            1 << 24,
-            1 << 30,
-            u32::MAX,
-        ] {
+        for x in [0u32, 1, 2, 3, 255, 256, 1000, 65_535, (1 << 24) - 1, 1 << 24, 1 << 30, u32::MAX] {
             let got = sqrt_q4(x) as f64;
             let want = 16.0 * (x as f64).sqrt();
             assert!(got <= want + 1e-9, "x={x}");

@@ -52,7 +52,7 @@ pub struct Estimate {
     pub state: TrackState,
     /// The transition that happened in this step, if any.
     pub event: Option<Event>,
-    /// How many particles satisfied the appearance condition: similarity
+    /// How many particles satisfied the appearance condition: colour `ρ`
     /// above the background's `μ + kσ` (and the floor).
     pub appearing: u16,
     /// Whether the target model was updated in this step.
@@ -80,11 +80,7 @@ struct Models<const K: usize> {
 impl<const K: usize> Models<K> {
     /// The largest squared distance the active cues can produce.
     fn d2_max(&self, cfg: &Config) -> Real {
-        if self.edge.is_some() {
-            cfg.combination.d2_max()
-        } else {
-            1.0
-        }
+        if self.edge.is_some() { cfg.combination.d2_max() } else { 1.0 }
     }
 }
 
@@ -94,7 +90,7 @@ struct Target<const K: usize> {
     models: Models<K>,
     /// Frame size the tracker was initialised on.
     frame: (usize, usize),
-    /// The appearance threshold on the similarity.
+    /// The appearance threshold on the colour ρ.
     threshold: Real,
     /// Half axes to give particles re-drawn while searching.
     half_axes: (Real, Real),
@@ -113,19 +109,28 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
     /// Histograms of ellipse `e`, left in `self` (for a model update).
     fn observe(&mut self, cfg: &Config, frame: &Frame<'_>, e: &Ellipse, edges: bool) {
         let lattice = Lattice::new(cfg.sampling, cfg.max_samples, e.hx, e.hy);
-        self.colour.compute_on(frame, e, cfg.binning, lattice);
         if edges {
-            self.map.histogram(frame, e, lattice, &mut self.edge);
+            // One walk over the region feeds both cues.
+            let Scratch { colour, edge, map } = self;
+            edge.clear();
+            colour.compute_with(frame, e, cfg.binning, lattice, |x, y, w| {
+                if let Some(bin) = map.bin_at(x, y) {
+                    edge.add(bin, w);
+                }
+            });
+        } else {
+            self.colour.compute_on(frame, e, cfg.binning, lattice);
         }
     }
 
-    /// The similarity of ellipse `e` to `models`, in `[0, 1]`.
-    fn similarity(&mut self, cfg: &Config, frame: &Frame<'_>, models: &Models<K>, e: &Ellipse) -> Real {
+    /// How ellipse `e` compares with `models`: (colour ρ, combined similarity),
+    /// both in `[0, 1]`.
+    fn similarity(&mut self, cfg: &Config, frame: &Frame<'_>, models: &Models<K>, e: &Ellipse) -> (Real, Real) {
         self.observe(cfg, frame, e, models.edge.is_some());
         let rho = models.colour.bhattacharyya(&self.colour);
         match &models.edge {
-            Some(m) => cfg.combination.similarity(rho, m.bhattacharyya(&self.edge)),
-            None => rho,
+            Some(m) => (rho, cfg.combination.similarity(rho, m.bhattacharyya(&self.edge))),
+            None => (rho, rho),
         }
     }
 
@@ -143,11 +148,7 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
             self.map.compute(
                 frame,
                 rect,
-                EdgeParams {
-                    bins: e.bins as usize,
-                    threshold: e.threshold,
-                    min_spacing,
-                },
+                EdgeParams { bins: e.bins as usize, threshold: e.threshold, min_spacing, flat_bin: e.flat_bin },
             );
         }
     }
@@ -157,12 +158,7 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
 /// Sobel window), clipped to a `w × h` frame.
 fn cover(e: &Ellipse, w: usize, h: usize) -> (usize, usize, usize, usize) {
     let clip = |v: Real, hi: usize| -> usize { v.clamp(0.0, hi as Real) as usize };
-    (
-        clip(e.cx - e.hx - 1.0, w),
-        clip(e.cy - e.hy - 1.0, h),
-        clip(e.cx + e.hx + 2.0, w),
-        clip(e.cy + e.hy + 2.0, h),
-    )
+    (clip(e.cx - e.hx - 1.0, w), clip(e.cy - e.hy - 1.0, h), clip(e.cx + e.hx + 2.0, w), clip(e.cy + e.hy + 2.0, h))
 }
 
 /// A colour particle-filter tracker with `N` particles, colour histograms of
@@ -231,11 +227,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         }
         config.validate()?;
         if config.binning.bins() > K {
-            return Err(ConfigError {
-                field: "binning",
-                problem: ParamProblem::OutOfRange,
-            }
-            .into());
+            return Err(ConfigError { field: "binning", problem: ParamProblem::OutOfRange }.into());
         }
         Ok(Tracker {
             config,
@@ -243,11 +235,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
             particles: [Particle::default(); N],
             resampled: [Particle::default(); N],
             weights: [1.0 / N as Real; N],
-            scratch: Scratch {
-                colour: Histogram::new(),
-                edge: Histogram::new(),
-                map: EdgeMap::new(),
-            },
+            scratch: Scratch { colour: Histogram::new(), edge: Histogram::new(), map: EdgeMap::new() },
             target: None,
             state: TrackState::Searching,
             misses: 0,
@@ -342,11 +330,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         sc.map_edges(cfg, frame, cover(&e, fw, fh), (e.hx, e.hy));
         sc.observe(cfg, frame, &e, cfg.edges.is_some());
         let colour = Model::from_histogram(&sc.colour).ok_or(RegionError::NoPixels)?;
-        let edge = if cfg.edges.is_some() {
-            Model::from_histogram(&sc.edge)
-        } else {
-            None
-        };
+        let edge = if cfg.edges.is_some() { Model::from_histogram(&sc.edge) } else { None };
         let models = Models { colour, edge };
 
         // Background similarity on a grid of target-sized regions that do not
@@ -363,7 +347,12 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
             while x + bbox.width <= fw {
                 let cand = BoundingBox::new(x, y, bbox.width, bbox.height);
                 if cand.iou(bbox) == 0.0 {
-                    let sim = sc.similarity(cfg, frame, &models, &Ellipse::from_box(&cand));
+                    // The appearance condition is the first paper's: on colour.
+                    // Edges are sparse, so in a plain background a few stray
+                    // ones can match the target's orientations well (measured
+                    // on the exit-and-return scene), which would make an empty
+                    // scene "contain" the target.
+                    let (sim, _) = sc.similarity(cfg, frame, &models, &Ellipse::from_box(&cand));
                     n += 1;
                     s1 += sim;
                     s2 += sim * sim;
@@ -377,9 +366,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         let threshold = if n >= 2 {
             let mean = s1 / n as Real;
             let var = (s2 / n as Real - mean * mean).max(0.0);
-            (mean + cfg.appearance_sigmas * sqrt(var))
-                .max(cfg.min_appearance)
-                .min(1.0)
+            (mean + cfg.appearance_sigmas * sqrt(var)).max(cfg.min_appearance).min(1.0)
         } else {
             cfg.min_appearance
         };
@@ -402,26 +389,13 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         };
         let size = (frame.width(), frame.height());
         if size != target.frame {
-            return Err(Error::FrameSizeChanged {
-                expected: target.frame,
-                got: size,
-            });
+            return Err(Error::FrameSizeChanged { expected: target.frame, got: size });
         }
         let cfg = &self.config;
-        let bounds = Bounds {
-            width: size.0 as Real,
-            height: size.1 as Real,
-            min_half: cfg.min_half_axis,
-        };
+        let bounds = Bounds { width: size.0 as Real, height: size.1 as Real, min_half: cfg.min_half_axis };
 
         // 1. Resample in proportion to the last step's weights, 2. propagate.
-        resample(
-            &self.particles,
-            &mut self.weights,
-            &mut self.resampled,
-            cfg.resampling,
-            &mut self.rng,
-        );
+        resample(&self.particles, &mut self.weights, &mut self.resampled, cfg.resampling, &mut self.rng);
         self.particles = self.resampled;
         for p in self.particles.iter_mut() {
             cfg.dynamics.propagate(p, &bounds, &mut self.rng);
@@ -451,8 +425,8 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         let mut appearing = 0u16;
         let mut best: Real = 0.0;
         for (p, w) in self.particles.iter().zip(self.weights.iter_mut()) {
-            let sim = self.scratch.similarity(cfg, frame, &target.models, &p.ellipse());
-            if sim > target.threshold {
+            let (rho, sim) = self.scratch.similarity(cfg, frame, &target.models, &p.ellipse());
+            if rho > target.threshold {
                 appearing += 1;
             }
             best = best.max(sim);
@@ -476,7 +450,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         // 4. Estimate the mean state and look at it.
         let mean = mean_state(&self.particles, &self.weights);
         let ellipse = mean.ellipse();
-        let confidence = self.scratch.similarity(cfg, frame, &target.models, &ellipse);
+        let (_, confidence) = self.scratch.similarity(cfg, frame, &target.models, &ellipse);
 
         // 5. The appearance test drives the state machine.
         let seen = appearing as Real > cfg.kickoff * N as Real;
@@ -494,11 +468,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
                 }
             }
             TrackState::Searching | TrackState::Lost if seen => {
-                event = Some(if self.state == TrackState::Searching {
-                    Event::Acquired
-                } else {
-                    Event::Reacquired
-                });
+                event = Some(if self.state == TrackState::Searching { Event::Acquired } else { Event::Reacquired });
                 self.state = TrackState::Tracking;
                 self.misses = 0;
             }
@@ -506,7 +476,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         }
 
         // 6. Adapt the model, only on confident tracking frames.
-        let pi_e = gaussian(d2_max * (1.0 - confidence), sigma);
+        let pi_e = gaussian(d2_max * (1.0 - confidence), cfg.update_sigma);
         let model_updated = self.state == TrackState::Tracking
             && event.is_none()
             && self.misses == 0
@@ -523,15 +493,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
             target.half_axes = (ellipse.hx, ellipse.hy);
         }
 
-        Ok(Estimate {
-            ellipse,
-            confidence,
-            state: self.state,
-            event,
-            appearing,
-            model_updated,
-            sigma,
-        })
+        Ok(Estimate { ellipse, confidence, state: self.state, event, appearing, model_updated, sigma })
     }
 }
 
@@ -539,11 +501,5 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
 fn uniform_particle<R: Rng>(rng: &mut R, width: usize, height: usize, hx: Real, hy: Real) -> Particle {
     let x = unit_from_bits(rng.next_u32()) * width as Real;
     let y = unit_from_bits(rng.next_u32()) * height as Real;
-    Particle {
-        x,
-        y,
-        hx,
-        hy,
-        ..Default::default()
-    }
+    Particle { x, y, hx, hy, ..Default::default() }
 }

@@ -51,11 +51,7 @@ pub enum FixtureError {
     /// The header's dimensions are inconsistent.
     BadDimensions(FrameError),
     /// The file ends inside frame `index`.
-    TruncatedFrame {
-        index: u32,
-        expected_len: usize,
-        actual_len: usize,
-    },
+    TruncatedFrame { index: u32, expected_len: usize, actual_len: usize },
     /// Bytes after the last frame.
     TrailingBytes { extra: usize },
     /// A ground-truth value is NaN or infinite.
@@ -68,23 +64,15 @@ impl fmt::Display for FixtureError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             FixtureError::TruncatedHeader { len } => {
-                write!(
-                    f,
-                    "file is {len} bytes, shorter than the {HEADER_LEN}-byte fixture header"
-                )
+                write!(f, "file is {len} bytes, shorter than the {HEADER_LEN}-byte fixture header")
             }
             FixtureError::BadMagic => write!(f, "not a pftrack fixture (bad magic bytes)"),
             FixtureError::UnsupportedVersion(v) => write!(f, "fixture version {v} is not supported (want {VERSION})"),
             FixtureError::UnknownFormat(c) => write!(f, "unknown pixel format code {c}"),
             FixtureError::BadDimensions(e) => write!(f, "inconsistent header dimensions: {e}"),
-            FixtureError::TruncatedFrame {
-                index,
-                expected_len,
-                actual_len,
-            } => write!(
-                f,
-                "file ends inside frame {index}: its record needs {expected_len} bytes, {actual_len} remain"
-            ),
+            FixtureError::TruncatedFrame { index, expected_len, actual_len } => {
+                write!(f, "file ends inside frame {index}: its record needs {expected_len} bytes, {actual_len} remain")
+            }
             FixtureError::TrailingBytes { extra } => write!(f, "{extra} unexpected bytes after the last frame"),
             FixtureError::BadGroundTruth { index } => write!(f, "frame {index} has a NaN or infinite ground-truth box"),
             FixtureError::BadVisibility { index, value } => {
@@ -167,11 +155,7 @@ impl Fixture {
         for index in 0..count {
             let rest = bytes.len() - at;
             if rest < record_len {
-                return Err(FixtureError::TruncatedFrame {
-                    index,
-                    expected_len: record_len,
-                    actual_len: rest,
-                });
+                return Err(FixtureError::TruncatedFrame { index, expected_len: record_len, actual_len: rest });
             }
             let truth = BoundingBox::new(
                 f32_at(bytes, at),
@@ -179,39 +163,21 @@ impl Fixture {
                 f32_at(bytes, at + 8),
                 f32_at(bytes, at + 12),
             );
-            if ![truth.x, truth.y, truth.width, truth.height]
-                .iter()
-                .all(|v| v.is_finite())
-            {
+            if ![truth.x, truth.y, truth.width, truth.height].iter().all(|v| v.is_finite()) {
                 return Err(FixtureError::BadGroundTruth { index });
             }
             let visible_permille = u16_at(bytes, at + 16);
             if visible_permille > 1000 {
-                return Err(FixtureError::BadVisibility {
-                    index,
-                    value: visible_permille,
-                });
+                return Err(FixtureError::BadVisibility { index, value: visible_permille });
             }
             let pixels = bytes[at + RECORD_META_LEN..at + record_len].to_vec();
-            frames.push(FixtureFrame {
-                truth,
-                visible_permille,
-                pixels,
-            });
+            frames.push(FixtureFrame { truth, visible_permille, pixels });
             at += record_len;
         }
         if at != bytes.len() {
-            return Err(FixtureError::TrailingBytes {
-                extra: bytes.len() - at,
-            });
+            return Err(FixtureError::TrailingBytes { extra: bytes.len() - at });
         }
-        Ok(Fixture {
-            format,
-            width,
-            height,
-            stride,
-            frames,
-        })
+        Ok(Fixture { format, width, height, stride, frames })
     }
 
     /// Serialises the fixture.
@@ -308,16 +274,10 @@ mod tests {
         assert_eq!(Fixture::parse(&b), Err(FixtureError::UnknownFormat(77)));
         let mut b = good.clone();
         b[16] = 2; // stride 2 < 3 px * 2 bytes
-        assert!(matches!(
-            Fixture::parse(&b),
-            Err(FixtureError::BadDimensions(FrameError::StrideTooSmall { .. }))
-        ));
+        assert!(matches!(Fixture::parse(&b), Err(FixtureError::BadDimensions(FrameError::StrideTooSmall { .. }))));
         let mut b = good.clone();
         b[12] = 0; // width 0
-        assert_eq!(
-            Fixture::parse(&b),
-            Err(FixtureError::BadDimensions(FrameError::ZeroSize))
-        );
+        assert_eq!(Fixture::parse(&b), Err(FixtureError::BadDimensions(FrameError::ZeroSize)));
         let mut b = good.clone();
         b.push(0);
         assert_eq!(Fixture::parse(&b), Err(FixtureError::TrailingBytes { extra: 1 }));
@@ -326,9 +286,6 @@ mod tests {
         assert_eq!(Fixture::parse(&b), Err(FixtureError::BadGroundTruth { index: 0 }));
         let mut b = good;
         b[HEADER_LEN + 16..HEADER_LEN + 18].copy_from_slice(&1001u16.to_le_bytes());
-        assert_eq!(
-            Fixture::parse(&b),
-            Err(FixtureError::BadVisibility { index: 0, value: 1001 })
-        );
+        assert_eq!(Fixture::parse(&b), Err(FixtureError::BadVisibility { index: 0, value: 1001 }));
     }
 }

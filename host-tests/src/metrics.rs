@@ -45,18 +45,11 @@ pub fn score(predicted: &[BoundingBox], truth: &[BoundingBox]) -> Option<Scores>
     }
     let ious: Vec<f64> = pairs.iter().map(|(p, t)| p.iou(t) as f64).collect();
     let errs: Vec<f64> = pairs.iter().map(|(p, t)| centre_error(p, t)).collect();
-    let auc = (0..SUCCESS_THRESHOLDS)
-        .map(|i| fraction_above(&ious, i as f64 * 0.05))
-        .sum::<f64>()
+    let auc = (0..SUCCESS_THRESHOLDS).map(|i| fraction_above(&ious, i as f64 * 0.05)).sum::<f64>()
         / SUCCESS_THRESHOLDS as f64;
     let precision20 = errs.iter().filter(|&&e| e <= 20.0).count() as f64 / errs.len() as f64;
     let mean_iou = ious.iter().sum::<f64>() / ious.len() as f64;
-    Some(Scores {
-        auc,
-        precision20,
-        mean_iou,
-        frames: pairs.len(),
-    })
+    Some(Scores { auc, precision20, mean_iou, frames: pairs.len() })
 }
 
 /// The median of a list (0 for an empty one).
@@ -67,11 +60,7 @@ pub fn median(values: &[f64]) -> f64 {
     let mut v = values.to_vec();
     v.sort_by(|a, b| a.total_cmp(b));
     let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
+    if n % 2 == 1 { v[n / 2] } else { 0.5 * (v[n / 2 - 1] + v[n / 2]) }
 }
 
 #[cfg(test)]
@@ -104,10 +93,7 @@ mod tests {
 
     #[test]
     fn absent_targets_are_not_scored() {
-        let truth = vec![
-            BoundingBox::new(0.0, 0.0, 10.0, 10.0),
-            BoundingBox::new(0.0, 0.0, 0.0, 0.0),
-        ];
+        let truth = vec![BoundingBox::new(0.0, 0.0, 10.0, 10.0), BoundingBox::new(0.0, 0.0, 0.0, 0.0)];
         let pred = vec![truth[0], BoundingBox::new(50.0, 50.0, 10.0, 10.0)];
         assert_eq!(score(&pred, &truth).unwrap().frames, 1);
         assert!(score(&pred[1..], &truth[1..]).is_none());

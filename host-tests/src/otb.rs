@@ -15,18 +15,12 @@ pub fn parse_groundtruth(text: &str) -> Result<Vec<BoundingBox>, String> {
         }
         let vals: Vec<&str> = line.split([',', '\t', ' ']).filter(|s| !s.is_empty()).collect();
         if vals.len() != 4 {
-            return Err(format!(
-                "line {}: expected 4 values x,y,w,h, found {}",
-                i + 1,
-                vals.len()
-            ));
+            return Err(format!("line {}: expected 4 values x,y,w,h, found {}", i + 1, vals.len()));
         }
         let mut v = [0f32; 4];
         for (slot, s) in v.iter_mut().zip(&vals) {
             // OTB marks absent targets with NaN; keep them (they are not scored).
-            *slot = s
-                .parse::<f32>()
-                .map_err(|_| format!("line {}: `{s}` is not a number", i + 1))?;
+            *slot = s.parse::<f32>().map_err(|_| format!("line {}: `{s}` is not a number", i + 1))?;
         }
         out.push(BoundingBox::new(v[0], v[1], v[2], v[3]));
     }
@@ -98,21 +92,12 @@ pub fn load(dir: &Path, mut progress: impl FnMut(usize, usize)) -> Result<Sequen
         if i == 0 {
             (width, height) = (w, h);
         } else if (w, h) != (width, height) {
-            return Err(format!(
-                "{}: {w}x{h}, but the first frame is {width}x{height}",
-                f.display()
-            ));
+            return Err(format!("{}: {w}x{h}, but the first frame is {width}x{height}", f.display()));
         }
         frames.push(img.into_raw());
         progress(i + 1, files.len());
     }
-    Ok(Sequence {
-        name,
-        width,
-        height,
-        frames,
-        truth,
-    })
+    Ok(Sequence { name, width, height, frames, truth })
 }
 
 #[cfg(test)]

@@ -56,24 +56,10 @@ pub struct SceneSpec {
 /// The committed fixture set: together they cover every item the generator
 /// promises, in every pixel format.
 pub fn catalogue() -> Vec<SceneSpec> {
-    let s = |name, story, format, frames, seed| SceneSpec {
-        name,
-        story,
-        format,
-        width: 128,
-        height: 96,
-        frames,
-        seed,
-    };
+    let s = |name, story, format, frames, seed| SceneSpec { name, story, format, width: 128, height: 96, frames, seed };
     vec![
         s("smooth_scale", Story::SmoothScale, PixelFormat::Rgb565, 36, 1),
-        s(
-            "abrupt_illumination",
-            Story::AbruptIllumination,
-            PixelFormat::Yuv422,
-            30,
-            2,
-        ),
+        s("abrupt_illumination", Story::AbruptIllumination, PixelFormat::Yuv422, 30, 2),
         s("occlusion", Story::Occlusion, PixelFormat::Rgb565, 44, 3),
         s("distractor", Story::Distractor, PixelFormat::Rgb888, 30, 4),
         s("exit_return", Story::ExitReturn, PixelFormat::Rgb565, 48, 5),
@@ -104,15 +90,7 @@ struct Layout {
 
 fn layout(story: Story, t: usize, n: usize) -> Layout {
     let tf = t as f64;
-    let base = Layout {
-        cx: 64.0,
-        cy: 48.0,
-        a: 11.0,
-        b: 13.0,
-        occluder: None,
-        distractor: None,
-        gain: 1.0,
-    };
+    let base = Layout { cx: 64.0, cy: 48.0, a: 11.0, b: 13.0, occluder: None, distractor: None, gain: 1.0 };
     match story {
         Story::SmoothScale | Story::GraySmooth => {
             let s = 1.0 + 0.4 * tf / (n as f64 - 1.0).max(1.0);
@@ -134,28 +112,15 @@ fn layout(story: Story, t: usize, n: usize) -> Layout {
                     cy += dy;
                 }
             }
-            Layout {
-                cx,
-                cy,
-                gain: 1.0 - 0.4 * tf / (n as f64 - 1.0).max(1.0),
-                ..base
-            }
+            Layout { cx, cy, gain: 1.0 - 0.4 * tf / (n as f64 - 1.0).max(1.0), ..base }
         }
         Story::Occlusion => {
             let left = 75.0 - tf;
-            Layout {
-                cx: 40.0 + 1.2 * tf,
-                cy: 50.0,
-                occluder: Some([left, 20.0, left + 34.0, 80.0]),
-                ..base
-            }
+            Layout { cx: 40.0 + 1.2 * tf, cy: 50.0, occluder: Some([left, 20.0, left + 34.0, 80.0]), ..base }
         }
-        Story::Distractor => Layout {
-            cx: 30.0 + 1.5 * tf,
-            cy: 40.0,
-            distractor: Some((100.0 - 1.5 * tf, 58.0)),
-            ..base
-        },
+        Story::Distractor => {
+            Layout { cx: 30.0 + 1.5 * tf, cy: 40.0, distractor: Some((100.0 - 1.5 * tf, 58.0)), ..base }
+        }
         Story::ExitReturn => {
             let cx = if t < 16 {
                 70.0 + 4.5 * tf
@@ -165,11 +130,7 @@ fn layout(story: Story, t: usize, n: usize) -> Layout {
             } else {
                 139.0 - 4.0 * (tf - 30.0)
             };
-            Layout {
-                cx,
-                cy: 48.0 + 6.0 * (tf * 0.3).sin(),
-                ..base
-            }
+            Layout { cx, cy: 48.0 + 6.0 * (tf * 0.3).sin(), ..base }
         }
     }
 }
@@ -199,16 +160,9 @@ fn blob_colour(dx: f64, dy: f64, b: f64, horizontal: bool) -> [f64; 3] {
 fn background(w: usize, h: usize, rng: &mut Xoshiro256PlusPlus) -> Vec<[f64; 3]> {
     let cell = 16usize;
     let (gw, gh) = (w / cell + 2, h / cell + 2);
-    let palette = [
-        [60.0, 120.0, 70.0],
-        [90.0, 140.0, 150.0],
-        [120.0, 120.0, 110.0],
-        [40.0, 80.0, 120.0],
-        [150.0, 160.0, 140.0],
-    ];
-    let grid: Vec<[f64; 3]> = (0..gw * gh)
-        .map(|_| palette[(rng.next_u32() % palette.len() as u32) as usize])
-        .collect();
+    let palette =
+        [[60.0, 120.0, 70.0], [90.0, 140.0, 150.0], [120.0, 120.0, 110.0], [40.0, 80.0, 120.0], [150.0, 160.0, 140.0]];
+    let grid: Vec<[f64; 3]> = (0..gw * gh).map(|_| palette[(rng.next_u32() % palette.len() as u32) as usize]).collect();
     let mut out = Vec::with_capacity(w * h);
     for y in 0..h {
         for x in 0..w {
@@ -240,10 +194,8 @@ pub fn generate(spec: &SceneSpec) -> Fixture {
     let mut rgb = vec![[0u8; 3]; w * h];
     for t in 0..spec.frames {
         let l = layout(spec.story, t, spec.frames);
-        let occluded = |x: f64, y: f64| {
-            l.occluder
-                .is_some_and(|[x0, y0, x1, y1]| x >= x0 && x < x1 && y >= y0 && y < y1)
-        };
+        let occluded =
+            |x: f64, y: f64| l.occluder.is_some_and(|[x0, y0, x1, y1]| x >= x0 && x < x1 && y >= y0 && y < y1);
         for y in 0..h {
             for x in 0..w {
                 // Pixel centres, in the continuous coordinates of the ground truth.
@@ -291,29 +243,14 @@ pub fn generate(spec: &SceneSpec) -> Fixture {
                 }
             }
         }
-        let visible_permille = if total == 0 {
-            0
-        } else {
-            (seen as u64 * 1000 / total as u64) as u16
-        };
+        let visible_permille = if total == 0 { 0 } else { (seen as u64 * 1000 / total as u64) as u16 };
         frames.push(FixtureFrame {
-            truth: BoundingBox::new(
-                (l.cx - l.a) as f32,
-                (l.cy - l.b) as f32,
-                (2.0 * l.a) as f32,
-                (2.0 * l.b) as f32,
-            ),
+            truth: BoundingBox::new((l.cx - l.a) as f32, (l.cy - l.b) as f32, (2.0 * l.a) as f32, (2.0 * l.b) as f32),
             visible_permille,
             pixels: encode(&rgb, w, h, spec.format),
         });
     }
-    Fixture {
-        format: spec.format,
-        width: w,
-        height: h,
-        stride,
-        frames,
-    }
+    Fixture { format: spec.format, width: w, height: h, stride, frames }
 }
 
 /// Packs RGB pixels into a camera format, tightly (stride = width * bpp).

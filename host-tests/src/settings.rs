@@ -10,7 +10,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ("resampling", "multinomial | systematic"),
     ("binning", "rgb8x8x8 | hsv8x8x4"),
     ("max_samples", "most pixels read per region and cue, 0 = all"),
-    ("edges", "off | BINS:THRESHOLD, e.g. 8:50"),
+    ("edges", "off | BINS:THRESHOLD[:flat], e.g. 8:100:flat (flat: weak pixels get a bin)"),
     ("combination", "product | weighted:W (W = colour weight)"),
     ("sigma", "fixed σ, e.g. 0.2"),
     ("adaptive_sigma", "MIN:MAX, e.g. 0.02:0.5 (σ chosen per frame)"),
@@ -22,6 +22,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ("scale_rate_noise", "per frame"),
     ("alpha", "model adaptation rate"),
     ("update_threshold", "π_T"),
+    ("update_sigma", "σ of the model-update gate"),
     ("appearance_sigmas", "k in ρ > μ + kσ"),
     ("min_appearance", "floor of the appearance threshold"),
     ("kickoff", "b"),
@@ -36,9 +37,7 @@ fn num(key: &str, v: &str) -> Result<f32, String> {
 
 /// Applies one `key=value` setting to `c`.
 pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
-    let (key, v) = setting
-        .split_once('=')
-        .ok_or_else(|| format!("`{setting}`: expected key=value"))?;
+    let (key, v) = setting.split_once('=').ok_or_else(|| format!("`{setting}`: expected key=value"))?;
     let (key, v) = (key.trim(), v.trim());
     match key {
         "sampling" => {
@@ -63,21 +62,23 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
                 _ => return Err(format!("binning: `{v}` is not rgb8x8x8 or hsv8x8x4")),
             }
         }
-        "max_samples" => {
-            c.max_samples = v
-                .parse()
-                .map_err(|_| format!("max_samples: `{v}` is not a whole number"))?
-        }
+        "max_samples" => c.max_samples = v.parse().map_err(|_| format!("max_samples: `{v}` is not a whole number"))?,
         "edges" => {
             c.edges = if v == "off" {
                 None
             } else {
-                let (b, t) = v
-                    .split_once(':')
-                    .ok_or_else(|| format!("edges: `{v}` is not off or BINS:THRESHOLD"))?;
+                let mut parts = v.split(':');
+                let (b, t, flat) = (parts.next(), parts.next(), parts.next());
+                let (Some(b), Some(t)) = (b, t) else {
+                    return Err(format!("edges: `{v}` is not off or BINS:THRESHOLD[:flat]"));
+                };
+                if !matches!(flat, None | Some("flat")) || parts.next().is_some() {
+                    return Err(format!("edges: `{v}` is not off or BINS:THRESHOLD[:flat]"));
+                }
                 Some(EdgeCue {
                     bins: b.parse().map_err(|_| format!("edges: `{b}` is not a bin count"))?,
                     threshold: t.parse().map_err(|_| format!("edges: `{t}` is not a threshold"))?,
+                    flat_bin: flat.is_some(),
                 })
             }
         }
@@ -92,13 +93,8 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
         }
         "sigma" => c.likelihood.sigma = Sigma::Fixed(num(key, v)?),
         "adaptive_sigma" => {
-            let (lo, hi) = v
-                .split_once(':')
-                .ok_or_else(|| format!("adaptive_sigma: `{v}` is not MIN:MAX"))?;
-            c.likelihood.sigma = Sigma::Adaptive {
-                min: num(key, lo)?,
-                max: num(key, hi)?,
-            };
+            let (lo, hi) = v.split_once(':').ok_or_else(|| format!("adaptive_sigma: `{v}` is not MIN:MAX"))?;
+            c.likelihood.sigma = Sigma::Adaptive { min: num(key, lo)?, max: num(key, hi)? };
         }
         "eps" => c.likelihood.eps = num(key, v)?,
         "position_noise" => c.dynamics.position_noise = num(key, v)?,
@@ -108,14 +104,11 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
         "scale_rate_noise" => c.dynamics.scale_rate_noise = num(key, v)?,
         "alpha" => c.alpha = num(key, v)?,
         "update_threshold" => c.update_threshold = num(key, v)?,
+        "update_sigma" => c.update_sigma = num(key, v)?,
         "appearance_sigmas" => c.appearance_sigmas = num(key, v)?,
         "min_appearance" => c.min_appearance = num(key, v)?,
         "kickoff" => c.kickoff = num(key, v)?,
-        "lost_after" => {
-            c.lost_after = v
-                .parse()
-                .map_err(|_| format!("lost_after: `{v}` is not a whole number"))?
-        }
+        "lost_after" => c.lost_after = v.parse().map_err(|_| format!("lost_after: `{v}` is not a whole number"))?,
         "reseed_fraction" => c.reseed_fraction = num(key, v)?,
         "min_half_axis" => c.min_half_axis = num(key, v)?,
         _ => {

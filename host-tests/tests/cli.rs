@@ -5,11 +5,7 @@ use std::process::Command;
 
 fn track(args: &[&str]) -> (bool, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_track")).args(args).output().unwrap();
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
+    (out.status.success(), String::from_utf8_lossy(&out.stdout).into(), String::from_utf8_lossy(&out.stderr).into())
 }
 
 fn fixture(name: &str) -> String {
@@ -25,17 +21,9 @@ fn tracks_a_fixture_and_writes_its_track() {
     let text = std::fs::read_to_string(dir.join("gray_smooth.txt")).unwrap();
     // Reason: one line per frame (30 frames), the first the initial box.
     assert_eq!(text.lines().count(), 30);
-    let first: Vec<f32> = text
-        .lines()
-        .next()
-        .unwrap()
-        .split(',')
-        .map(|v| v.parse().unwrap())
-        .collect();
-    let truth = host_tests::fixture::Fixture::load(std::path::Path::new(&fixture("gray_smooth")))
-        .unwrap()
-        .frames[0]
-        .truth;
+    let first: Vec<f32> = text.lines().next().unwrap().split(',').map(|v| v.parse().unwrap()).collect();
+    let truth =
+        host_tests::fixture::Fixture::load(std::path::Path::new(&fixture("gray_smooth"))).unwrap().frames[0].truth;
     assert!((first[0] - truth.x).abs() < 0.01 && (first[3] - truth.height).abs() < 0.01);
     std::fs::remove_dir_all(dir).ok();
 }
@@ -67,14 +55,7 @@ fn bad_inputs_fail_clearly() {
     assert!(!ok && err.contains("file ends inside frame"), "{err}");
 
     // A bad setting.
-    let (ok, _, err) = track(&[
-        "fixture",
-        &fixture("gray_smooth"),
-        "--set",
-        "alpha=7",
-        "--out-dir",
-        &out,
-    ]);
+    let (ok, _, err) = track(&["fixture", &fixture("gray_smooth"), "--set", "alpha=7", "--out-dir", &out]);
     assert!(!ok && err.contains("alpha"), "{err}");
     std::fs::remove_dir_all(dir).ok();
 }

@@ -12,9 +12,7 @@ use std::path::PathBuf;
 const SEEDS: [u64; 3] = [1, 2, 3];
 
 fn load(name: &str) -> Fixture {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../fixtures")
-        .join(format!("{name}.pft"));
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../fixtures").join(format!("{name}.pft"));
     Fixture::load(&path).unwrap()
 }
 
@@ -52,11 +50,7 @@ fn committed_fixtures_are_what_the_generator_makes() {
     // generator that computed it; regenerating must give the same bytes.
     for spec in catalogue() {
         let fx = load(spec.name);
-        assert!(
-            fx == generate(&spec),
-            "{} differs from the generator's output",
-            spec.name
-        );
+        assert!(fx == generate(&spec), "{} differs from the generator's output", spec.name);
     }
 }
 
@@ -73,22 +67,11 @@ fn follows_smooth_scaling_gray_and_occluded_targets() {
         let fx = load(name);
         for seed in SEEDS {
             let (est, _) = run(&fx, seed);
-            let visible: Vec<usize> = (1..fx.frames.len())
-                .filter(|&i| fx.frames[i].visible_permille >= 500)
-                .collect();
-            let inside = visible
-                .iter()
-                .filter(|&&i| on_target(&est[i - 1], &fx.frames[i].truth))
-                .count();
+            let visible: Vec<usize> = (1..fx.frames.len()).filter(|&i| fx.frames[i].visible_permille >= 500).collect();
+            let inside = visible.iter().filter(|&&i| on_target(&est[i - 1], &fx.frames[i].truth)).count();
             let frac = inside as f64 / visible.len() as f64;
-            assert!(
-                frac >= 0.9,
-                "{name} seed {seed}: centre on target in {frac:.2} of visible frames"
-            );
-            let iou: f64 = visible
-                .iter()
-                .map(|&i| est[i - 1].bbox().iou(&fx.frames[i].truth) as f64)
-                .sum::<f64>()
+            assert!(frac >= 0.9, "{name} seed {seed}: centre on target in {frac:.2} of visible frames");
+            let iou: f64 = visible.iter().map(|&i| est[i - 1].bbox().iou(&fx.frames[i].truth) as f64).sum::<f64>()
                 / visible.len() as f64;
             assert!(iou >= 0.5, "{name} seed {seed}: mean IoU {iou:.2}");
         }
@@ -98,47 +81,29 @@ fn follows_smooth_scaling_gray_and_occluded_targets() {
 #[test]
 fn reports_lost_when_the_target_leaves_and_tracking_when_it_returns() {
     let fx = load("exit_return");
-    let gone = (0..fx.frames.len())
-        .find(|&i| fx.frames[i].visible_permille == 0)
-        .unwrap();
-    let back = (gone..fx.frames.len())
-        .find(|&i| fx.frames[i].visible_permille >= 500)
-        .unwrap();
+    let gone = (0..fx.frames.len()).find(|&i| fx.frames[i].visible_permille == 0).unwrap();
+    let back = (gone..fx.frames.len()).find(|&i| fx.frames[i].visible_permille >= 500).unwrap();
     let lost_after = Config::default().lost_after as usize;
     for seed in SEEDS {
         let (est, _) = run(&fx, seed);
         // Estimates are for frames 1..; frame i is est[i - 1].
-        let lost_at = (1..fx.frames.len())
-            .find(|&i| est[i - 1].event == Some(Event::LostTarget))
-            .unwrap();
+        let lost_at = (1..fx.frames.len()).find(|&i| est[i - 1].event == Some(Event::LostTarget)).unwrap();
         // Reason: the target is gone at `gone`; the filter needs `lost_after`
         // consecutive misses, plus one frame of slack for the particles that
         // still overlap the last visible sliver.
-        assert!(
-            lost_at >= gone - 1 && lost_at <= gone + lost_after,
-            "seed {seed}: lost at {lost_at}, gone at {gone}"
-        );
+        assert!(lost_at >= gone - 1 && lost_at <= gone + lost_after, "seed {seed}: lost at {lost_at}, gone at {gone}");
         // It stays lost while the target is away: nothing in the background
         // looks like it. (Re-acquiring on a partial return is fine.)
         for i in (lost_at..back).filter(|&i| fx.frames[i].visible_permille == 0) {
-            assert_ne!(
-                est[i - 1].state,
-                TrackState::Tracking,
-                "seed {seed}: claims tracking at frame {i}"
-            );
+            assert_ne!(est[i - 1].state, TrackState::Tracking, "seed {seed}: claims tracking at frame {i}");
         }
-        let found = (back - 2..fx.frames.len())
-            .find(|&i| est[i - 1].event == Some(Event::Reacquired))
-            .unwrap();
+        let found = (back - 2..fx.frames.len()).find(|&i| est[i - 1].event == Some(Event::Reacquired)).unwrap();
         // Reason: once half the target is back in view, the particles waiting
         // at the border see it within a few frames.
         assert!(found <= back + 3, "seed {seed}: reacquired at {found}, back at {back}");
         // And it is really on it a few frames later.
         let i = (found + 4).min(fx.frames.len() - 1);
-        assert!(
-            on_target(&est[i - 1], &fx.frames[i].truth),
-            "seed {seed}: off target at frame {i}"
-        );
+        assert!(on_target(&est[i - 1], &fx.frames[i].truth), "seed {seed}: off target at frame {i}");
     }
 }
 
@@ -149,32 +114,17 @@ fn model_is_not_updated_while_the_target_is_hidden() {
     let fx = load("occlusion");
     for seed in SEEDS {
         let (est, models) = run(&fx, seed);
-        let hidden: Vec<usize> = (1..fx.frames.len())
-            .filter(|&i| fx.frames[i].visible_permille == 0)
-            .collect();
+        let hidden: Vec<usize> = (1..fx.frames.len()).filter(|&i| fx.frames[i].visible_permille == 0).collect();
         assert!(hidden.len() >= 3, "the scene hides the target for several frames");
         for &i in &hidden {
-            assert!(
-                !est[i - 1].model_updated,
-                "seed {seed}: model updated at hidden frame {i}"
-            );
-            assert_eq!(
-                models[i - 1],
-                models[i - 2],
-                "seed {seed}: model changed at hidden frame {i}"
-            );
+            assert!(!est[i - 1].model_updated, "seed {seed}: model updated at hidden frame {i}");
+            assert_eq!(models[i - 1], models[i - 2], "seed {seed}: model changed at hidden frame {i}");
         }
         // ...while it does adapt on clear frames (the gate is not simply shut).
-        assert!(
-            est.iter().take(5).any(|e| e.model_updated),
-            "seed {seed}: never updated on clear frames"
-        );
+        assert!(est.iter().take(5).any(|e| e.model_updated), "seed {seed}: never updated on clear frames");
         // After the occluder has passed, the tracker is back on the target.
         let last = fx.frames.len() - 1;
-        assert!(
-            on_target(&est[last - 1], &fx.frames[last].truth),
-            "seed {seed}: lost after occlusion"
-        );
+        assert!(on_target(&est[last - 1], &fx.frames[last].truth), "seed {seed}: lost after occlusion");
     }
 }
 
@@ -210,12 +160,8 @@ fn searching_acquires_a_target_that_appears() {
     // is away, and must not fire until it returns (automatic initialisation).
     let fx = load("exit_return");
     let fr = frames(&fx);
-    let gone = (0..fx.frames.len())
-        .find(|&i| fx.frames[i].visible_permille == 0)
-        .unwrap();
-    let back = (gone..fx.frames.len())
-        .find(|&i| fx.frames[i].visible_permille >= 500)
-        .unwrap();
+    let gone = (0..fx.frames.len()).find(|&i| fx.frames[i].visible_permille == 0).unwrap();
+    let back = (gone..fx.frames.len()).find(|&i| fx.frames[i].visible_permille >= 500).unwrap();
     for seed in SEEDS {
         let mut t: Box<Tracker<100>> = Box::new(Tracker::new(Config::default(), seed).unwrap());
         t.search(&fr[0], fx.frames[0].truth).unwrap();
@@ -232,10 +178,7 @@ fn searching_acquires_a_target_that_appears() {
         let at = acquired.unwrap_or_else(|| panic!("seed {seed}: never acquired"));
         // Reason: acquisition needs the target in view (it cannot happen before
         // it returns) and a few frames for the re-drawn particles to find it.
-        assert!(
-            at + 2 >= back && at <= back + 4,
-            "seed {seed}: acquired at {at}, back at {back}"
-        );
+        assert!(at + 2 >= back && at <= back + 4, "seed {seed}: acquired at {at}, back at {back}");
     }
 }
 
@@ -285,11 +228,5 @@ fn misuse_gives_typed_errors() {
     t.init(&fr[0], fx.frames[0].truth).unwrap();
     let small = vec![0u8; 64 * 48];
     let other = Frame::packed(&small, 64, 48, pftrack::PixelFormat::Gray8).unwrap();
-    assert_eq!(
-        t.step(&other),
-        Err(pftrack::Error::FrameSizeChanged {
-            expected: (128, 96),
-            got: (64, 48)
-        })
-    );
+    assert_eq!(t.step(&other), Err(pftrack::Error::FrameSizeChanged { expected: (128, 96), got: (64, 48) }));
 }

@@ -76,52 +76,16 @@ enum Command {
 /// The ablation study: each variant is a list of `--set` overrides applied on
 /// top of the default configuration (and of the command line's `--set`s).
 const VARIANTS: &[(&str, &[&str])] = &[
-    (
-        "paper 1: RGB, all pixels, σ 0.2",
-        &["sampling=full", "edges=off", "sigma=0.2", "eps=0", "binning=rgb8x8x8"],
-    ),
-    (
-        "checkerboard",
-        &[
-            "sampling=checkerboard",
-            "edges=off",
-            "sigma=0.2",
-            "eps=0",
-            "binning=rgb8x8x8",
-        ],
-    ),
-    (
-        "quarter",
-        &[
-            "sampling=quarter",
-            "edges=off",
-            "sigma=0.2",
-            "eps=0",
-            "binning=rgb8x8x8",
-        ],
-    ),
-    (
-        "all pixels, budget 400",
-        &["sampling=full", "max_samples=400", "edges=off", "sigma=0.2", "eps=0"],
-    ),
+    ("paper 1: RGB, all pixels, σ 0.2", &["sampling=full", "edges=off", "sigma=0.2", "eps=0", "binning=rgb8x8x8"]),
+    ("checkerboard", &["sampling=checkerboard", "edges=off", "sigma=0.2", "eps=0", "binning=rgb8x8x8"]),
+    ("quarter", &["sampling=quarter", "edges=off", "sigma=0.2", "eps=0", "binning=rgb8x8x8"]),
+    ("all pixels, budget 400", &["sampling=full", "max_samples=400", "edges=off", "sigma=0.2", "eps=0"]),
     (
         "+ edges 8 bins, threshold 50, product",
-        &[
-            "sampling=full",
-            "edges=8:50",
-            "combination=product",
-            "sigma=0.2",
-            "eps=0",
-        ],
+        &["sampling=full", "edges=8:50", "combination=product", "sigma=0.2", "eps=0"],
     ),
-    (
-        "+ adaptive σ [0.02, 0.5] + ε 0.005",
-        &["sampling=full", "edges=off", "adaptive_sigma=0.02:0.5", "eps=0.005"],
-    ),
-    (
-        "HSV 8x8x4",
-        &["sampling=full", "edges=off", "sigma=0.2", "eps=0", "binning=hsv8x8x4"],
-    ),
+    ("+ adaptive σ [0.02, 0.5] + ε 0.005", &["sampling=full", "edges=off", "adaptive_sigma=0.02:0.5", "eps=0.005"]),
+    ("HSV 8x8x4", &["sampling=full", "edges=off", "sigma=0.2", "eps=0", "binning=hsv8x8x4"]),
     ("defaults", &[]),
 ];
 
@@ -150,23 +114,10 @@ fn bar(len: usize, what: &str) -> ProgressBar {
 fn load(path: &Path) -> Result<Loaded, String> {
     if path.is_file() {
         let fx = Fixture::load(path)?;
-        let name = path
-            .file_stem()
-            .and_then(|s| s.to_str())
-            .unwrap_or("fixture")
-            .to_string();
+        let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("fixture").to_string();
         // Frames where the target is entirely hidden or gone are not scored.
-        let truth = fx
-            .frames
-            .iter()
-            .map(|f| {
-                if f.visible_permille == 0 {
-                    BoundingBox::default()
-                } else {
-                    f.truth
-                }
-            })
-            .collect();
+        let truth =
+            fx.frames.iter().map(|f| if f.visible_permille == 0 { BoundingBox::default() } else { f.truth }).collect();
         let frames = fx.frames.into_iter().map(|f| f.pixels).collect();
         return Ok(Loaded {
             name,
@@ -223,10 +174,7 @@ fn evaluate(seq: &Loaded, config: Config, seed: u64) -> Result<(Row, Run), Strin
         .collect::<Result<_, _>>()?;
     let init = *seq.truth.first().ok_or_else(|| format!("{}: no frames", seq.name))?;
     if !has_target(&init) {
-        return Err(format!(
-            "{}: the first ground-truth box has no target to start from",
-            seq.name
-        ));
+        return Err(format!("{}: the first ground-truth box has no target to start from", seq.name));
     }
     let pb = bar(frames.len(), "track");
     pb.set_prefix(seq.name.clone());
@@ -249,10 +197,7 @@ fn evaluate(seq: &Loaded, config: Config, seed: u64) -> Result<(Row, Run), Strin
 
 fn print_frames(seq: &Loaded, run: &Run) {
     println!("appearance threshold: {:.3}", run.threshold);
-    println!(
-        "{:>5} {:>9} {:>11} {:>5} {:>4} {:>27} {:>27}",
-        "frame", "state", "event", "conf", "app", "box", "truth"
-    );
+    println!("{:>5} {:>9} {:>11} {:>5} {:>4} {:>27} {:>27}", "frame", "state", "event", "conf", "app", "box", "truth");
     for (i, e) in run.estimates.iter().enumerate() {
         let b = e.bbox();
         let t = seq.truth.get(i + 1).copied().unwrap_or_default();
@@ -282,11 +227,8 @@ fn run_one(path: &Path, common: &Common) -> Result<Row, String> {
         print_frames(&seq, &run);
     }
     let out = common.out_dir.join(format!("{}.txt", seq.name));
-    let text: String = run
-        .boxes
-        .iter()
-        .map(|b| format!("{:.2},{:.2},{:.2},{:.2}\n", b.x, b.y, b.width, b.height))
-        .collect();
+    let text: String =
+        run.boxes.iter().map(|b| format!("{:.2},{:.2},{:.2},{:.2}\n", b.x, b.y, b.width, b.height)).collect();
     std::fs::write(&out, text).map_err(|e| format!("{}: {e}", out.display()))?;
     Ok(row)
 }
@@ -296,11 +238,7 @@ fn ablate(paths: &[PathBuf], seeds: u64, only: Option<&str>, common: &Common) ->
     println!(
         "ablation over {} sequences, seeds 1..={seeds}, {PARTICLES} particles; extra settings: {}",
         seqs.len(),
-        if common.set.is_empty() {
-            "none".to_string()
-        } else {
-            common.set.join(" ")
-        }
+        if common.set.is_empty() { "none".to_string() } else { common.set.join(" ") }
     );
     println!();
     println!("| variant | settings | mean AUC | mean P20 | ms/frame |");
@@ -321,17 +259,8 @@ fn ablate(paths: &[PathBuf], seeds: u64, only: Option<&str>, common: &Common) ->
                 n += 1.0;
             }
         }
-        let shown = if sets.is_empty() {
-            "(defaults)".to_string()
-        } else {
-            sets.join(" ")
-        };
-        println!(
-            "| {name} | `{shown}` | {:.3} | {:.3} | {:.3} |",
-            auc / n,
-            p20 / n,
-            ms / n
-        );
+        let shown = if sets.is_empty() { "(defaults)".to_string() } else { sets.join(" ") };
+        println!("| {name} | `{shown}` | {:.3} | {:.3} | {:.3} |", auc / n, p20 / n, ms / n);
     }
     Ok(())
 }
@@ -341,12 +270,7 @@ fn main() -> ExitCode {
     let (paths, mut common, ablation) = match cli.command {
         Command::Otb { seqs, common } => (seqs, common, None),
         Command::Fixture { files, common } => (files, common, None),
-        Command::Ablate {
-            seqs,
-            seeds,
-            only,
-            common,
-        } => (seqs, common, Some((seeds, only))),
+        Command::Ablate { seqs, seeds, only, common } => (seqs, common, Some((seeds, only))),
     };
     for s in &common.set {
         if let Err(e) = host_tests::settings::apply(&mut common.config, s) {
@@ -371,11 +295,7 @@ fn main() -> ExitCode {
         eprintln!("error: {}: {e}", common.out_dir.display());
         return ExitCode::FAILURE;
     }
-    let settings = if common.set.is_empty() {
-        "default config".to_string()
-    } else {
-        common.set.join(" ")
-    };
+    let settings = if common.set.is_empty() { "default config".to_string() } else { common.set.join(" ") };
     println!("pftrack, {PARTICLES} particles, seed {}, {settings}", common.seed);
     println!(
         "{:<22} {:>6} {:>6} {:>6} {:>9} {:>5} {:>6}",
