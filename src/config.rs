@@ -209,8 +209,16 @@ mod tests {
         type Case = (fn(&mut Config), &'static str, ParamProblem);
         let cases: [Case; 15] = [
             (|c| c.combination = Combination::Weighted { colour: 1.5 }, "combination.colour", ParamProblem::OutOfRange),
-            (|c| c.edges = Some(EdgeCue { bins: 7, threshold: 50, flat_bin: true }), "edges.bins", ParamProblem::OutOfRange),
-            (|c| c.edges = Some(EdgeCue { bins: 8, threshold: 9999, flat_bin: true }), "edges.threshold", ParamProblem::OutOfRange),
+            (
+                |c| c.edges = Some(EdgeCue { bins: 7, threshold: 50, flat_bin: true }),
+                "edges.bins",
+                ParamProblem::OutOfRange,
+            ),
+            (
+                |c| c.edges = Some(EdgeCue { bins: 8, threshold: 9999, flat_bin: true }),
+                "edges.threshold",
+                ParamProblem::OutOfRange,
+            ),
             (|c| c.likelihood.sigma = Sigma::Fixed(0.0), "likelihood.sigma", ParamProblem::OutOfRange),
             (|c| c.likelihood.sigma = Sigma::Fixed(-1.0), "likelihood.sigma", ParamProblem::OutOfRange),
             (|c| c.likelihood.sigma = Sigma::Fixed(Real::INFINITY), "likelihood.sigma", ParamProblem::NonFinite),

@@ -137,7 +137,7 @@ impl<const E: usize> EdgeMap<E> {
         let d = 1usize << shift;
         let cols = (x1 - x0).div_ceil(d).min(E);
         let rows = (y1 - y0).div_ceil(d);
-        let rows = if cols == 0 { 0 } else { rows.min(E / cols) };
+        let rows = E.checked_div(cols).map_or(0, |fit| rows.min(fit));
         *self = EdgeMap { cells: self.cells, x0, y0, cols, rows, shift };
         let t2 = threshold as i32 * threshold as i32;
         let empty: &[u8] = &[];
@@ -290,7 +290,11 @@ mod tests {
         for spacing in [1usize, 2, 4] {
             let mut map = EdgeMap::<4096>::new();
             let (x0, y0) = (3usize, 2usize);
-            map.compute(&f, (x0, y0, w, h), EdgeParams { bins: 8, threshold: 120, min_spacing: spacing, flat_bin: false });
+            map.compute(
+                &f,
+                (x0, y0, w, h),
+                EdgeParams { bins: 8, threshold: 120, min_spacing: spacing, flat_bin: false },
+            );
             assert_eq!(map.spacing(), spacing);
             for y in (y0..h).step_by(spacing) {
                 for x in (x0..w).step_by(spacing) {

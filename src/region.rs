@@ -53,7 +53,7 @@ impl Lattice {
             return l;
         }
         // Expected samples: area · density, density = 1/step² (halved by the checker).
-        let area = 3.141_592_7 * hx.max(0.5) * hy.max(0.5);
+        let area = core::f32::consts::PI * hx.max(0.5) * hy.max(0.5);
         let density = if checker { 0.5 } else { 1.0 };
         let want = area * density / max_samples as Real;
         if want > (step * step) as Real {
@@ -247,7 +247,7 @@ mod tests {
         for s in [Sampling::Full, Sampling::Checkerboard, Sampling::Quarter] {
             let l = Lattice::new(s, 500, e.hx, e.hy);
             let (n, _) = count(&f, &e, l);
-            assert!(n <= 560 && n >= 200, "{s:?}: {n} samples, step {}", l.step);
+            assert!((200..=560).contains(&n), "{s:?}: {n} samples, step {}", l.step);
         }
         let small = Lattice::new(Sampling::Checkerboard, 500, 5.0, 5.0);
         assert_eq!(small, lattice(Sampling::Checkerboard));

@@ -26,7 +26,8 @@ pub enum Story {
     AbruptIllumination,
     /// An opaque bar slides over the target: partial, full, partial occlusion.
     Occlusion,
-    /// A decoy with the same colours (stripes turned 90°) crosses near the target.
+    /// A decoy with the same colours (stripes turned 90°) crosses the target's
+    /// path head on, passing behind it.
     Distractor,
     /// The target leaves through the right edge, stays away, and comes back.
     ExitReturn,
@@ -61,7 +62,7 @@ pub fn catalogue() -> Vec<SceneSpec> {
         s("smooth_scale", Story::SmoothScale, PixelFormat::Rgb565, 36, 1),
         s("abrupt_illumination", Story::AbruptIllumination, PixelFormat::Yuv422, 30, 2),
         s("occlusion", Story::Occlusion, PixelFormat::Rgb565, 44, 3),
-        s("distractor", Story::Distractor, PixelFormat::Rgb888, 30, 4),
+        s("distractor", Story::Distractor, PixelFormat::Rgb888, 44, 4),
         s("exit_return", Story::ExitReturn, PixelFormat::Rgb565, 48, 5),
         s("gray_smooth", Story::GraySmooth, PixelFormat::Gray8, 30, 6),
     ]

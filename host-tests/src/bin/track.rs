@@ -73,20 +73,41 @@ enum Command {
     },
 }
 
-/// The ablation study: each variant is a list of `--set` overrides applied on
-/// top of the default configuration (and of the command line's `--set`s).
+/// The ablation study: each variant changes the defaults (the best
+/// combination found) in one respect, except the first, which is the first
+/// paper's filter as written. The `--set`s of the command line apply on top.
 const VARIANTS: &[(&str, &[&str])] = &[
-    ("paper 1: RGB, all pixels, σ 0.2", &["sampling=full", "edges=off", "sigma=0.2", "eps=0", "binning=rgb8x8x8"]),
-    ("checkerboard", &["sampling=checkerboard", "edges=off", "sigma=0.2", "eps=0", "binning=rgb8x8x8"]),
-    ("quarter", &["sampling=quarter", "edges=off", "sigma=0.2", "eps=0", "binning=rgb8x8x8"]),
-    ("all pixels, budget 400", &["sampling=full", "max_samples=400", "edges=off", "sigma=0.2", "eps=0"]),
+    ("defaults (best combination)", &[]),
     (
-        "+ edges 8 bins, threshold 50, product",
-        &["sampling=full", "edges=8:50", "combination=product", "sigma=0.2", "eps=0"],
+        "paper 1 as written",
+        &[
+            "sampling=full",
+            "max_samples=0",
+            "edges=off",
+            "sigma=0.2",
+            "eps=0",
+            "position_noise=0.1",
+            "velocity_noise=0.05",
+            "velocity_decay=1",
+            "update_sigma=0.2",
+        ],
     ),
-    ("+ adaptive σ [0.02, 0.5] + ε 0.005", &["sampling=full", "edges=off", "adaptive_sigma=0.02:0.5", "eps=0.005"]),
-    ("HSV 8x8x4", &["sampling=full", "edges=off", "sigma=0.2", "eps=0", "binning=hsv8x8x4"]),
-    ("defaults", &[]),
+    ("sampling: all pixels", &["sampling=full"]),
+    ("sampling: quarter", &["sampling=quarter"]),
+    ("sampling: all pixels, no budget", &["sampling=full", "max_samples=0"]),
+    ("sampling: checkerboard, no budget", &["max_samples=0"]),
+    ("sampling: quarter, no budget", &["sampling=quarter", "max_samples=0"]),
+    ("cues: colour only", &["edges=off"]),
+    ("cues: edges threshold 50", &["edges=8:50"]),
+    ("cues: edges with a flat bin", &["edges=8:100:flat"]),
+    ("cues: weighted 0.5 instead of product", &["combination=weighted:0.5"]),
+    ("likelihood: fixed σ 0.2, no ε", &["sigma=0.2", "eps=0"]),
+    ("likelihood: adaptive σ, no ε", &["eps=0"]),
+    ("colour: HSV 8x8x4", &["binning=hsv8x8x4"]),
+    ("dynamics: constant velocity, paper noise", &["velocity_decay=1", "velocity_noise=0.05", "position_noise=0.1"]),
+    ("model: update gate σ 0.2 (paper 1)", &["update_sigma=0.2"]),
+    ("model: never updated", &["alpha=0"]),
+    ("resampling: multinomial", &["resampling=multinomial"]),
 ];
 
 /// A loaded sequence, in whatever format it came.
