@@ -65,4 +65,4 @@ pub use histogram::{Histogram, Model};
 pub use likelihood::{Combination, Likelihood, Sigma};
 pub use region::Sampling;
 pub use scalar::Real;
-pub use tracker::{Estimate, Event, TrackState, Tracker};
+pub use tracker::{Estimate, Event, Trace, TrackState, Tracker};

@@ -66,6 +66,83 @@ impl Estimate {
     pub fn bbox(&self) -> BoundingBox {
         self.ellipse.to_box()
     }
+
+    /// A bit-exact, one-line text form of the estimate, for comparing runs
+    /// across targets: two estimates are identical exactly when their trace
+    /// lines are. The host harness and the firmware both print it.
+    ///
+    /// ```
+    /// # use pftrack::{Ellipse, Estimate, TrackState};
+    /// let e = Estimate {
+    ///     ellipse: Ellipse { cx: 10.5, cy: 20.0, hx: 4.0, hy: 6.25 },
+    ///     confidence: 0.5,
+    ///     state: TrackState::Tracking,
+    ///     event: None,
+    ///     appearing: 42,
+    ///     model_updated: true,
+    ///     sigma: 0.25,
+    /// };
+    /// // By hand: 10.5 is 0x41280000 in IEEE-754; the box's top is
+    /// // 20 − 6.25 = 13.75, shown rounded to 13.8.
+    /// assert_eq!(
+    ///     format!("{}", e.trace()),
+    ///     "tracking - 41280000 41a00000 40800000 40c80000 3f000000 3e800000 42 u | 6.5,13.8 8.0x12.5 c=500"
+    /// );
+    /// ```
+    pub fn trace(&self) -> Trace<'_> {
+        Trace(self)
+    }
+}
+
+/// See [`Estimate::trace`]: state, event, the ellipse's centre and half axes,
+/// the confidence and σ as IEEE-754 bit patterns, the appearing count, `u`
+/// if the model was updated (`-` if not), then a rounded human-readable box
+/// (x,y w×h) and the confidence in thousandths. No float formatting is used,
+/// which keeps it small and identical on every target.
+pub struct Trace<'a>(&'a Estimate);
+
+impl core::fmt::Display for Trace<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let e = self.0;
+        let state = match e.state {
+            TrackState::Searching => "searching",
+            TrackState::Tracking => "tracking",
+            TrackState::Lost => "lost",
+        };
+        let event = match e.event {
+            None => "-",
+            Some(Event::Initialised) => "initialised",
+            Some(Event::Acquired) => "acquired",
+            Some(Event::LostTarget) => "lost-target",
+            Some(Event::Reacquired) => "reacquired",
+        };
+        let el = &e.ellipse;
+        write!(f, "{state} {event}")?;
+        for v in [el.cx, el.cy, el.hx, el.hy, e.confidence, e.sigma] {
+            write!(f, " {:08x}", v.to_bits())?;
+        }
+        write!(f, " {} {}", e.appearing, if e.model_updated { "u" } else { "-" })?;
+        // Tenths of a pixel, rounded, in integers.
+        let tenths = |v: Real| -> i32 {
+            let t = v * 10.0;
+            (if t >= 0.0 { t + 0.5 } else { t - 0.5 }) as i32
+        };
+        let d = |f: &mut core::fmt::Formatter<'_>, v: Real| {
+            let t = tenths(v);
+            let sign = if t < 0 { "-" } else { "" };
+            write!(f, "{sign}{}.{}", t.unsigned_abs() / 10, t.unsigned_abs() % 10)
+        };
+        let b = e.bbox();
+        f.write_str(" | ")?;
+        d(f, b.x)?;
+        f.write_str(",")?;
+        d(f, b.y)?;
+        f.write_str(" ")?;
+        d(f, b.width)?;
+        f.write_str("x")?;
+        d(f, b.height)?;
+        write!(f, " c={}", (e.confidence * 1000.0 + 0.5) as u32)
+    }
 }
 
 /// The learnt appearance of the target.

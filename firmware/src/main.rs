@@ -1,0 +1,196 @@
+//! pftrack on a Cortex-M4F: reads a recorded fixture (`.pft`) from the host
+//! over semihosting, frame by frame, tracks it with the same core and seed
+//! as the host harness, and prints one bit-exact trace line per frame plus
+//! instruction counts, peak stack and a verdict. Exits 0 on success.
+//!
+//! Run it with `cargo qemu fixtures/occlusion.pft 1` (QEMU's MPS2 AN386
+//! board; see the README).
+#![no_std]
+#![no_main]
+
+mod host;
+
+use core::fmt::Write;
+use cortex_m::peripheral::syst::SystClkSource;
+use cortex_m_rt::entry;
+use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
+use cortex_m_semihosting::hio;
+use pftrack::{BoundingBox, Config, Frame, PixelFormat, Tracker};
+
+/// The largest frame the firmware holds: QVGA RGB565. Frames are streamed
+/// one at a time through this buffer, so memory does not grow with length.
+const FRAME_BYTES: usize = 320 * 240 * 2;
+/// Fixture header and per-frame record metadata sizes (host-tests/src/fixture.rs).
+const HEADER: usize = 32;
+const META: usize = 20;
+/// Instructions per SysTick tick under `-icount shift=0` on mps2-an386.
+const INSTRUCTIONS_PER_TICK: u32 = 40;
+/// Most frames whose instruction counts are kept for the median.
+const MAX_FRAMES: usize = 512;
+/// The value the unused stack is painted with.
+const PAINT: u32 = 0x5afe_c0de;
+
+/// The tracker lives in a static, not on the stack: it is the largest object.
+type FwTracker = Tracker<100>;
+
+#[entry]
+fn main() -> ! {
+    let ok = run();
+    debug::exit(if ok { EXIT_SUCCESS } else { EXIT_FAILURE });
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+fn run() -> bool {
+    let Ok(mut out) = hio::hstdout() else { return false };
+    macro_rules! fail {
+        ($($t:tt)*) => {{
+            let _ = writeln!(out, "error: {}", format_args!($($t)*));
+            return false;
+        }};
+    }
+
+    let mut args_buf = [0u8; 256];
+    let args = host::cmdline(&mut args_buf).unwrap_or("");
+    let mut words = args.split_ascii_whitespace().skip(1);
+    let path = words.next().unwrap_or("fixtures/occlusion.pft");
+    let seed: u64 = match words.next().map(str::parse) {
+        None => 1,
+        Some(Ok(s)) => s,
+        Some(Err(_)) => fail!("seed is not a number"),
+    };
+    let Some(mut file) = host::HostFile::open(path) else { fail!("cannot open {path}") };
+
+    let mut header = [0u8; HEADER];
+    if !file.read_exact(&mut header) || &header[..8] != b"PFTRKFX1" {
+        fail!("{path}: not a fixture");
+    }
+    let u16_at = |i: usize| u16::from_le_bytes([header[i], header[i + 1]]);
+    let u32_at = |i: usize| u32::from_le_bytes([header[i], header[i + 1], header[i + 2], header[i + 3]]);
+    let Some(format) = PixelFormat::from_code(u16_at(10)) else { fail!("unknown pixel format") };
+    let (width, height, stride, count) = (u16_at(12) as usize, u16_at(14) as usize, u32_at(16) as usize, u32_at(20));
+    let frame_len = stride * height;
+    if frame_len > FRAME_BYTES {
+        fail!("{width}x{height} frames need {frame_len} bytes; this firmware holds {FRAME_BYTES}");
+    }
+
+    let Some(pixels) = cortex_m::singleton!(: [u8; FRAME_BYTES] = [0; FRAME_BYTES]) else { fail!("buffer taken") };
+    let Some(ticks) = cortex_m::singleton!(: [u32; MAX_FRAMES] = [0; MAX_FRAMES]) else { fail!("buffer taken") };
+    let tracker = match FwTracker::new(Config::default(), seed) {
+        Ok(t) => cortex_m::singleton!(: FwTracker = t),
+        Err(e) => fail!("{e}"),
+    };
+    let Some(tracker) = tracker else { fail!("tracker taken") };
+
+    let Some(mut cp) = cortex_m::Peripherals::take() else { fail!("peripherals taken") };
+    cp.SYST.set_clock_source(SystClkSource::Core);
+    cp.SYST.set_reload(0x00ff_ffff);
+    cp.SYST.clear_current();
+    cp.SYST.enable_counter();
+
+    let _ = writeln!(out, "fixture {path} {width}x{height} {format:?} frames {count} seed {seed}");
+    let stack_floor = paint_stack();
+    let mut measured = 0usize;
+    for i in 0..count as usize {
+        let mut meta = [0u8; META];
+        let buf = &mut pixels[..frame_len];
+        if !file.read_exact(&mut meta) || !file.read_exact(buf) {
+            fail!("{path}: file ends inside frame {i}");
+        }
+        let f32_at = |k: usize| f32::from_le_bytes([meta[k], meta[k + 1], meta[k + 2], meta[k + 3]]);
+        let frame = match Frame::new(buf, width, height, stride, format) {
+            Ok(f) => f,
+            Err(e) => fail!("frame {i}: {e}"),
+        };
+        let t0 = cortex_m::peripheral::SYST::get_current();
+        let result = if i == 0 {
+            tracker.init(&frame, BoundingBox::new(f32_at(0), f32_at(4), f32_at(8), f32_at(12)))
+        } else {
+            tracker.step(&frame)
+        };
+        let t1 = cortex_m::peripheral::SYST::get_current();
+        // SysTick counts down and wraps at 2^24; one step is far shorter.
+        let elapsed = t0.wrapping_sub(t1) & 0x00ff_ffff;
+        match result {
+            Ok(est) => {
+                let _ = writeln!(out, "{i} {}", est.trace());
+            }
+            Err(e) => fail!("frame {i}: {e}"),
+        }
+        if i > 0
+            && let Some(slot) = ticks.get_mut(measured)
+        {
+            *slot = elapsed;
+            measured += 1;
+        }
+    }
+    let peak = stack_floor.map(peak_stack);
+
+    let steps = &mut ticks[..measured];
+    steps.sort_unstable();
+    if let (Some(min), Some(max)) = (steps.first(), steps.last()) {
+        let med = steps[steps.len() / 2];
+        let _ = writeln!(
+            out,
+            "instructions per step: min {} median {} max {} ({} steps, {} instructions per SysTick tick)",
+            min * INSTRUCTIONS_PER_TICK,
+            med * INSTRUCTIONS_PER_TICK,
+            max * INSTRUCTIONS_PER_TICK,
+            steps.len(),
+            INSTRUCTIONS_PER_TICK
+        );
+    }
+    if let Some(p) = peak {
+        let _ = writeln!(out, "peak stack: {p} bytes");
+    }
+    let _ = writeln!(out, "tracker RAM: {} bytes", core::mem::size_of::<FwTracker>());
+    let _ = writeln!(out, "ok");
+    true
+}
+
+unsafe extern "C" {
+    /// End of .bss: the stack may grow down to here (cortex-m-rt's link.x).
+    static mut __sheap: u32;
+    /// The initial stack pointer (top of RAM).
+    static _stack_start: u32;
+}
+
+/// Paints the free stack below the current stack pointer, so that the
+/// deepest point the stack reaches can be read back afterwards: a
+/// measurement, not an estimate. Returns the lowest painted address.
+fn paint_stack() -> Option<usize> {
+    let floor = core::ptr::addr_of_mut!(__sheap) as usize;
+    let sp = cortex_m::register::msp::read() as usize;
+    // Leave what the current frame is using alone.
+    let top = sp.checked_sub(64)? & !3;
+    let mut p = floor;
+    while p < top {
+        // SAFETY: [__sheap, sp − 64) is unused RAM between .bss and the live stack.
+        unsafe { core::ptr::write_volatile(p as *mut u32, PAINT) };
+        p += 4;
+    }
+    Some(floor)
+}
+
+/// Bytes of stack used at the deepest point since `paint_stack`.
+fn peak_stack(floor: usize) -> usize {
+    let top = core::ptr::addr_of!(_stack_start) as usize;
+    let mut p = floor;
+    // SAFETY: reads words of RAM between .bss and the stack top.
+    while p < top && unsafe { core::ptr::read_volatile(p as *const u32) } == PAINT {
+        p += 4;
+    }
+    top - p
+}
+
+#[panic_handler]
+fn panic(info: &core::panic::PanicInfo) -> ! {
+    if let Ok(mut err) = hio::hstderr() {
+        let _ = writeln!(err, "panic: {info}");
+    }
+    debug::exit(EXIT_FAILURE);
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
