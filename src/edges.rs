@@ -44,7 +44,7 @@ const NONE: u8 = u8::MAX;
 pub fn orientation_bin(gx: i32, gy: i32, bins: usize) -> usize {
     // Orientation is modulo 180°: fold into the upper half plane.
     let (gx, gy) = if gy < 0 || (gy == 0 && gx < 0) { (-gx, -gy) } else { (gx, gy) };
-    let stride = 16 / bins.clamp(2, 16);
+    let stride = 16 / bins.max(2).min(16);
     // Bin = the number of boundaries at or clockwise of the gradient; the
     // boundaries are sorted by angle, so binary search.
     let (mut lo, mut hi) = (0usize, bins);
@@ -125,7 +125,7 @@ impl<const E: usize> EdgeMap<E> {
         let (x0, y0, x1, y1) = rect;
         let (w, h) = (frame.width(), frame.height());
         let (x0, y0) = (x0.min(w), y0.min(h));
-        let (x1, y1) = (x1.clamp(x0, w), y1.clamp(y0, h));
+        let (x1, y1) = (x1.max(x0).min(w), y1.max(y0).min(h));
         // Start at the spacing the histograms need, coarsen until the region fits.
         let mut shift = 0;
         while shift < 12 && (2usize << shift) <= min_spacing {
@@ -138,7 +138,9 @@ impl<const E: usize> EdgeMap<E> {
         let cols = (x1 - x0).div_ceil(d).min(E);
         let rows = (y1 - y0).div_ceil(d);
         let rows = E.checked_div(cols).map_or(0, |fit| rows.min(fit));
-        *self = EdgeMap { cells: self.cells, x0, y0, cols, rows, shift };
+        // Field by field: rebuilding the struct would copy the cell buffer
+        // through the stack.
+        (self.x0, self.y0, self.cols, self.rows, self.shift) = (x0, y0, cols, rows, shift);
         let t2 = threshold as i32 * threshold as i32;
         let empty: &[u8] = &[];
         for j in 0..rows {

@@ -2,7 +2,7 @@
 //! mean-state estimate.
 
 use crate::geometry::Ellipse;
-use crate::scalar::{Real, normal_from_bits, sqrt, unit_from_bits};
+use crate::scalar::{Real, clamp, normal_from_bits, sqrt, unit_from_bits};
 use rand_core::Rng;
 
 /// One hypothesis `s = {x, y, vx, vy, Hx, Hy, ȧ}`: the centre of an upright
@@ -85,13 +85,13 @@ impl Dynamics {
         p.y += p.vy + self.position_noise * s * n();
         p.vx = self.velocity_decay * p.vx + self.velocity_noise * s * n();
         p.vy = self.velocity_decay * p.vy + self.velocity_noise * s * n();
-        p.a_dot = (p.a_dot + self.scale_rate_noise * n()).clamp(-0.1, 0.1);
+        p.a_dot = clamp(p.a_dot + self.scale_rate_noise * n(), -0.1, 0.1);
         p.hx *= 1.0 + p.a_dot + self.scale_noise * n();
         p.hy *= 1.0 + p.a_dot + self.scale_noise * n();
         keep_inside(&mut p.x, &mut p.vx, b.width);
         keep_inside(&mut p.y, &mut p.vy, b.height);
-        p.hx = p.hx.clamp(b.min_half, (0.5 * b.width).max(b.min_half));
-        p.hy = p.hy.clamp(b.min_half, (0.5 * b.height).max(b.min_half));
+        p.hx = clamp(p.hx, b.min_half, (0.5 * b.width).max(b.min_half));
+        p.hy = clamp(p.hy, b.min_half, (0.5 * b.height).max(b.min_half));
     }
 }
 

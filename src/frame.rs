@@ -259,7 +259,7 @@ fn yuv_to_rgb(y: i32, u: i32, v: i32) -> [u8; 3] {
     let r = y + ((359 * v) >> 8);
     let g = y - ((88 * u + 183 * v) >> 8);
     let b = y + ((454 * u) >> 8);
-    [r.clamp(0, 255) as u8, g.clamp(0, 255) as u8, b.clamp(0, 255) as u8]
+    [r.max(0).min(255) as u8, g.max(0).min(255) as u8, b.max(0).min(255) as u8]
 }
 
 /// Full-range BT.601 RGB to YUV, the inverse of the conversion used to read
@@ -269,7 +269,7 @@ pub fn rgb_to_yuv(rgb: [u8; 3]) -> [u8; 3] {
     let y = (77 * r + 150 * g + 29 * b + 128) >> 8;
     let u = ((-43 * r - 85 * g + 128 * b + 128) >> 8) + 128;
     let v = ((128 * r - 107 * g - 21 * b + 128) >> 8) + 128;
-    [y.clamp(0, 255) as u8, u.clamp(0, 255) as u8, v.clamp(0, 255) as u8]
+    [y.max(0).min(255) as u8, u.max(0).min(255) as u8, v.max(0).min(255) as u8]
 }
 
 /// Packs 8-bit RGB into little-endian RGB565 bytes (for tools that write frames).

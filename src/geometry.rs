@@ -52,7 +52,7 @@ impl BoundingBox {
         }
         let inter = ix * iy;
         let union = self.area() + other.area() - inter;
-        if union > 0.0 { (inter / union).clamp(0.0, 1.0) } else { 0.0 }
+        if union > 0.0 { crate::scalar::clamp(inter / union, 0.0, 1.0) } else { 0.0 }
     }
 
     /// Checks that the box is usable as a target in a `width × height` frame:

@@ -208,7 +208,7 @@ impl<const K: usize> Model<K> {
         }
         // Σ 16·sqrt(c) · 4096·sqrt(q) / (16·sqrt(C) · 4096)
         let denom = sqrt_q4(h.total) as Real * 4096.0;
-        if denom > 0.0 { (sum as Real / denom).clamp(0.0, 1.0) } else { 0.0 }
+        if denom > 0.0 { crate::scalar::clamp(sum as Real / denom, 0.0, 1.0) } else { 0.0 }
     }
 }
 

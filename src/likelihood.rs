@@ -72,7 +72,7 @@ impl Likelihood {
     pub fn sigma_for(&self, d2_min: Real) -> Real {
         match self.sigma {
             Sigma::Fixed(s) => s,
-            Sigma::Adaptive { min, max } => crate::scalar::sqrt(0.5 * d2_min.max(0.0)).clamp(min, max),
+            Sigma::Adaptive { min, max } => crate::scalar::clamp(crate::scalar::sqrt(0.5 * d2_min.max(0.0)), min, max),
         }
     }
 

@@ -63,7 +63,7 @@ impl Lattice {
             if (s_int as Real) < s {
                 s_int += 1;
             }
-            l.step = s_int.clamp(step, MAX_DIMENSION as u32);
+            l.step = s_int.max(step).min(MAX_DIMENSION as u32);
         }
         l
     }
@@ -100,8 +100,8 @@ impl Raster {
         }
         // Half axes below half a pixel would make ax exceed 2^26; such a region
         // is its centre pixel anyway. Above MAX_DIMENSION, ax would round to 0.
-        let hx = e.hx.clamp(0.5, MAX_DIMENSION as Real);
-        let hy = e.hy.clamp(0.5, MAX_DIMENSION as Real);
+        let hx = crate::scalar::clamp(e.hx, 0.5, MAX_DIMENSION as Real);
+        let hy = crate::scalar::clamp(e.hy, 0.5, MAX_DIMENSION as Real);
         let one = (1u32 << RADIUS2_SHIFT) as Real;
         Some(Raster {
             cx: floor(e.cx),

@@ -74,8 +74,18 @@ pub fn exp(x: Real) -> Real {
     let r = (x - k as Real * LN2_HI) - k as Real * LN2_LO;
     let p = 1.0 + r * (1.0 + r * (0.5 + r * (1.0 / 6.0 + r * (1.0 / 24.0 + r * (1.0 / 120.0 + r * (1.0 / 720.0))))));
     // k is in [-126, 127] here, so 2^k is a normal f32.
-    let two_k = Real::from_bits(((k + 127).clamp(1, 254) as u32) << 23);
+    let two_k = Real::from_bits(((k + 127).max(1).min(254) as u32) << 23);
     p * two_k
+}
+
+/// `v` limited to `[lo, hi]`, with NaN mapped to `lo`.
+///
+/// Unlike `f32::clamp`, it cannot panic (that one asserts `lo <= hi` and
+/// formats both in its message, which also drags float formatting into
+/// firmware). If `lo > hi`, the result is `hi`.
+#[inline(always)]
+pub fn clamp(v: Real, lo: Real, hi: Real) -> Real {
+    v.max(lo).min(hi)
 }
 
 /// A uniform sample in `[0, 1)` with 24 bits of resolution, from one `u32`.

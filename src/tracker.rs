@@ -234,7 +234,7 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
 /// The pixel rectangle covering ellipse `e` with a one-pixel margin (for the
 /// Sobel window), clipped to a `w × h` frame.
 fn cover(e: &Ellipse, w: usize, h: usize) -> (usize, usize, usize, usize) {
-    let clip = |v: Real, hi: usize| -> usize { v.clamp(0.0, hi as Real) as usize };
+    let clip = |v: Real, hi: usize| -> usize { crate::scalar::clamp(v, 0.0, hi as Real) as usize };
     (clip(e.cx - e.hx - 1.0, w), clip(e.cy - e.hy - 1.0, h), clip(e.cx + e.hx + 2.0, w), clip(e.cy + e.hy + 2.0, h))
 }
 

@@ -33,6 +33,9 @@ pub enum Story {
     ExitReturn,
     /// Smooth motion in GRAY8: only brightness to go on.
     GraySmooth,
+    /// The speed audit's scene: a round target of 1/8 of the frame width
+    /// (40x40 px in QVGA) on a smooth path, at any resolution.
+    Audit,
 }
 
 /// A scene to generate.
@@ -68,6 +71,31 @@ pub fn catalogue() -> Vec<SceneSpec> {
     ]
 }
 
+/// The speed audit's scenes (generated on demand, not committed): QVGA
+/// RGB565 with a 40x40 target, and the same scene in QQVGA GRAY8.
+pub fn audit_catalogue() -> Vec<SceneSpec> {
+    vec![
+        SceneSpec {
+            name: "audit_qvga_rgb565",
+            story: Story::Audit,
+            format: PixelFormat::Rgb565,
+            width: 320,
+            height: 240,
+            frames: 20,
+            seed: 7,
+        },
+        SceneSpec {
+            name: "audit_qqvga_gray8",
+            story: Story::Audit,
+            format: PixelFormat::Gray8,
+            width: 160,
+            height: 120,
+            frames: 20,
+            seed: 7,
+        },
+    ]
+}
+
 /// Colours of the target and the distractor.
 const BODY: [f64; 3] = [215.0, 45.0, 35.0];
 const STRIPE: [f64; 3] = [235.0, 200.0, 40.0];
@@ -89,7 +117,7 @@ struct Layout {
     gain: f64,
 }
 
-fn layout(story: Story, t: usize, n: usize) -> Layout {
+fn layout(story: Story, t: usize, n: usize, (w, h): (usize, usize)) -> Layout {
     let tf = t as f64;
     let base = Layout { cx: 64.0, cy: 48.0, a: 11.0, b: 13.0, occluder: None, distractor: None, gain: 1.0 };
     match story {
@@ -121,6 +149,16 @@ fn layout(story: Story, t: usize, n: usize) -> Layout {
         }
         Story::Distractor => {
             Layout { cx: 30.0 + 1.5 * tf, cy: 40.0, distractor: Some((100.0 - 1.5 * tf, 58.0)), ..base }
+        }
+        Story::Audit => {
+            let (w, h) = (w as f64, h as f64);
+            Layout {
+                cx: 0.5 * w + 0.25 * w * (2.0 * PI * tf / 40.0).sin(),
+                cy: 0.5 * h + 0.2 * h * (2.0 * PI * tf / 30.0).sin(),
+                a: w / 16.0,
+                b: w / 16.0,
+                ..base
+            }
         }
         Story::ExitReturn => {
             let cx = if t < 16 {
@@ -194,7 +232,7 @@ pub fn generate(spec: &SceneSpec) -> Fixture {
     let mut frames = Vec::with_capacity(spec.frames);
     let mut rgb = vec![[0u8; 3]; w * h];
     for t in 0..spec.frames {
-        let l = layout(spec.story, t, spec.frames);
+        let l = layout(spec.story, t, spec.frames, (w, h));
         let occluded =
             |x: f64, y: f64| l.occluder.is_some_and(|[x0, y0, x1, y1]| x >= x0 && x < x1 && y >= y0 && y < y1);
         for y in 0..h {

@@ -2,7 +2,7 @@
 //! generator, or checks that the committed files are what it generates.
 
 use clap::Parser;
-use host_tests::scene::{catalogue, generate};
+use host_tests::scene::{audit_catalogue, catalogue, generate};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -15,6 +15,9 @@ struct Args {
     /// Compare with the files in --out-dir instead of writing them.
     #[arg(long)]
     check: bool,
+    /// Write the speed audit's scenes instead of the committed set.
+    #[arg(long)]
+    audit: bool,
 }
 
 fn main() -> ExitCode {
@@ -26,7 +29,8 @@ fn main() -> ExitCode {
         return ExitCode::FAILURE;
     }
     let mut ok = true;
-    for spec in catalogue() {
+    let specs = if args.audit { audit_catalogue() } else { catalogue() };
+    for spec in specs {
         let bytes = generate(&spec).to_bytes();
         let path = args.out_dir.join(format!("{}.pft", spec.name));
         if args.check {
