@@ -8,4 +8,7 @@ fn main() {
     std::fs::copy(&memory, out.join("memory.x")).expect("memory.x at the repository root");
     println!("cargo:rustc-link-search={}", out.display());
     println!("cargo:rerun-if-changed={}", memory.display());
+    if std::env::var_os("CARGO_FEATURE_DEFMT").is_some() {
+        println!("cargo:rustc-link-arg=-Tdefmt.x");
+    }
 }

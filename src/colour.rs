@@ -3,6 +3,7 @@
 /// How a colour maps to a histogram bin. A component of the configuration;
 /// a histogram's capacity `K` must be at least [`Binning::bins`].
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Binning {
     /// RGB with 8 levels per channel: 512 bins (the first paper's choice).
     #[default]

@@ -20,6 +20,7 @@ use crate::scalar::Real;
 /// assert_eq!(c.validate().unwrap_err().field, "likelihood.sigma");
 /// ```
 #[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Config {
     /// Colour quantisation of the histograms.
     pub binning: Binning,
@@ -80,6 +81,7 @@ pub struct Config {
 
 /// Parameters of the edge-orientation cue.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct EdgeCue {
     /// Orientation bins over 0–180°: 2, 4, 8 or 16.
     pub bins: u8,

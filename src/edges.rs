@@ -63,6 +63,7 @@ pub fn orientation_bin(gx: i32, gy: i32, bins: usize) -> usize {
 
 /// How an [`EdgeMap`] is computed.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct EdgeParams {
     /// Orientation bins over 0–180°: 2, 4, 8 or 16.
     pub bins: usize,

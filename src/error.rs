@@ -5,6 +5,7 @@ use core::fmt;
 
 /// Why a buffer could not be viewed as a [`crate::Frame`].
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum FrameError {
     /// Width or height is zero.
     ZeroSize,
@@ -38,6 +39,7 @@ pub enum FrameError {
 
 /// What is wrong with one configuration field.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum ParamProblem {
     /// NaN or infinite.
     NonFinite,
@@ -47,6 +49,7 @@ pub enum ParamProblem {
 
 /// A rejected [`crate::Config`] field.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ConfigError {
     /// The field's name, as spelled in [`crate::Config`].
     pub field: &'static str,
@@ -56,6 +59,7 @@ pub struct ConfigError {
 
 /// Why a box cannot be tracked in a frame.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum RegionError {
     /// A coordinate or size is NaN or infinite.
     NonFinite,
@@ -72,6 +76,7 @@ pub enum RegionError {
 
 /// Every error the tracker can return.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Error {
     /// The frame view is inconsistent.
     Frame(FrameError),

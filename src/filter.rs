@@ -9,6 +9,7 @@ use rand_core::Rng;
 /// ellipse, its velocity in pixels per frame, its half axes, and the rate at
 /// which its scale changes per frame.
 #[derive(Copy, Clone, Debug, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Particle {
     /// Centre, x.
     pub x: Real,
@@ -44,6 +45,7 @@ impl Particle {
 /// `s = sqrt(2Hx · 2Hy)`, so that one configuration serves a 10 px target in
 /// QQVGA and a 200 px one in VGA.
 #[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Dynamics {
     /// Standard deviation of the position noise, as a fraction of `s`.
     pub position_noise: Real,
@@ -108,6 +110,7 @@ fn keep_inside(pos: &mut Real, vel: &mut Real, size: Real) {
 
 /// How particles are drawn in proportion to their weights.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Resampling {
     /// N independent draws: cumulative sum, then a binary search for each
     /// (the first paper, Fig. 2). O(N log N).

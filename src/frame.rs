@@ -16,6 +16,7 @@ pub const MAX_DIMENSION: usize = 4096;
 
 /// A pixel layout, as camera sensors and their DMA engines deliver it.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum PixelFormat {
     /// 16-bit RGB 5:6:5, little-endian: red in bits 15..11, green 10..5, blue 4..0.
     Rgb565,

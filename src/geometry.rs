@@ -16,6 +16,7 @@ use crate::scalar::Real;
 /// assert!((a.iou(&b) - 1.0 / 3.0).abs() < 1e-6);
 /// ```
 #[derive(Copy, Clone, Debug, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct BoundingBox {
     /// Left edge.
     pub x: Real,
@@ -83,6 +84,7 @@ impl BoundingBox {
 
 /// An upright ellipse: centre and half axes, in pixels.
 #[derive(Copy, Clone, Debug, PartialEq, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Ellipse {
     /// Centre, x.
     pub cx: Real,

@@ -9,6 +9,7 @@ use crate::scalar::{Real, exp};
 
 /// How the likelihood's width is chosen.
 #[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Sigma {
     /// The same `σ` every frame (the first paper uses 0.2).
     Fixed(Real),
@@ -26,6 +27,7 @@ pub enum Sigma {
 
 /// How the colour and edge distances combine into one.
 #[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Combination {
     /// The product of the two cues' likelihoods with a shared σ:
     /// `exp(−d_c²/2σ²) · exp(−d_e²/2σ²) = exp(−(d_c² + d_e²)/2σ²)`,
@@ -60,6 +62,7 @@ impl Combination {
 
 /// The likelihood model.
 #[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Likelihood {
     /// How σ is chosen.
     pub sigma: Sigma,

@@ -15,6 +15,7 @@ use crate::scalar::{KERNEL_ONE, RADIUS2_SHIFT, Real};
 
 /// Which pixels of a region are read.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Sampling {
     /// Every pixel.
     Full,

@@ -16,6 +16,7 @@ use rand_xoshiro::Xoshiro128PlusPlus;
 
 /// What the tracker believes about its target.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum TrackState {
     /// Looking for a target it has a model of but has not found yet.
     Searching,
@@ -27,6 +28,7 @@ pub enum TrackState {
 
 /// A state change that happened in this step.
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Event {
     /// The tracker was (re-)initialised from a box.
     Initialised,
@@ -40,6 +42,7 @@ pub enum Event {
 
 /// The result of one step.
 #[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Estimate {
     /// The mean state's ellipse.
     pub ellipse: Ellipse,

@@ -15,6 +15,8 @@ use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
 use cortex_m_semihosting::hio;
+#[cfg(feature = "defmt")]
+use defmt_semihosting as _;
 use pftrack::{BoundingBox, Config, Frame, PixelFormat, Tracker};
 
 /// The largest frame the firmware holds: QVGA RGB565. Frames are streamed
@@ -43,7 +45,9 @@ fn main() -> ! {
 }
 
 fn run() -> bool {
-    let Ok(mut out) = hio::hstdout() else { return false };
+    // With defmt, stdout carries the binary defmt stream; text goes to stderr.
+    let out = if cfg!(feature = "defmt") { hio::hstderr() } else { hio::hstdout() };
+    let Ok(mut out) = out else { return false };
     macro_rules! fail {
         ($($t:tt)*) => {{
             let _ = writeln!(out, "error: {}", format_args!($($t)*));
@@ -115,6 +119,9 @@ fn run() -> bool {
         let elapsed = t0.wrapping_sub(t1) & 0x00ff_ffff;
         match result {
             Ok(est) => {
+                #[cfg(feature = "defmt")]
+                defmt::info!("frame {=usize}: {}", i, est);
+                #[cfg(not(feature = "defmt"))]
                 let _ = writeln!(out, "{i} {}", est.trace());
             }
             Err(e) => fail!("frame {i}: {e}"),
