@@ -17,14 +17,12 @@ use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
 use cortex_m_semihosting::hio;
 #[cfg(feature = "defmt")]
 use defmt_semihosting as _;
-use pftrack::{BoundingBox, Config, Frame, PixelFormat, Tracker};
+use pftrack::{Config, Frame, Tracker};
+use pftrack_fixture::{HEADER_LEN, Header, RECORD_META_LEN, RecordMeta};
 
 /// The largest frame the firmware holds: QVGA RGB565. Frames are streamed
 /// one at a time through this buffer, so memory does not grow with length.
 const FRAME_BYTES: usize = 320 * 240 * 2;
-/// Fixture header and per-frame record metadata sizes (host-tests/src/fixture.rs).
-const HEADER: usize = 32;
-const META: usize = 20;
 /// Instructions per SysTick tick under `-icount shift=0` on mps2-an386.
 const INSTRUCTIONS_PER_TICK: u32 = 40;
 /// Most frames whose instruction counts are kept for the median.
@@ -66,15 +64,16 @@ fn run() -> bool {
     };
     let Some(mut file) = host::HostFile::open(path) else { fail!("cannot open {path}") };
 
-    let mut header = [0u8; HEADER];
-    if !file.read_exact(&mut header) || &header[..8] != b"PFTRKFX1" {
-        fail!("{path}: not a fixture");
+    let mut header = [0u8; HEADER_LEN];
+    if !file.read_exact(&mut header) {
+        fail!("{path}: shorter than a fixture header");
     }
-    let u16_at = |i: usize| u16::from_le_bytes([header[i], header[i + 1]]);
-    let u32_at = |i: usize| u32::from_le_bytes([header[i], header[i + 1], header[i + 2], header[i + 3]]);
-    let Some(format) = PixelFormat::from_code(u16_at(10)) else { fail!("unknown pixel format") };
-    let (width, height, stride, count) = (u16_at(12) as usize, u16_at(14) as usize, u32_at(16) as usize, u32_at(20));
-    let frame_len = stride * height;
+    let h = match Header::parse(&header) {
+        Ok(h) => h,
+        Err(e) => fail!("{path}: {e}"),
+    };
+    let (format, width, height, stride, count) = (h.format, h.width, h.height, h.stride, h.frames);
+    let frame_len = h.frame_len();
     if frame_len > FRAME_BYTES {
         fail!("{width}x{height} frames need {frame_len} bytes; this firmware holds {FRAME_BYTES}");
     }
@@ -98,22 +97,21 @@ fn run() -> bool {
     let mut init_stack = None;
     let mut measured = 0usize;
     for i in 0..count as usize {
-        let mut meta = [0u8; META];
+        let mut meta = [0u8; RECORD_META_LEN];
         let buf = &mut pixels[..frame_len];
         if !file.read_exact(&mut meta) || !file.read_exact(buf) {
             fail!("{path}: file ends inside frame {i}");
         }
-        let f32_at = |k: usize| f32::from_le_bytes([meta[k], meta[k + 1], meta[k + 2], meta[k + 3]]);
+        let meta = match RecordMeta::parse(&meta, i as u32) {
+            Ok(m) => m,
+            Err(e) => fail!("{path}: {e}"),
+        };
         let frame = match Frame::new(buf, width, height, stride, format) {
             Ok(f) => f,
             Err(e) => fail!("frame {i}: {e}"),
         };
         let t0 = cortex_m::peripheral::SYST::get_current();
-        let result = if i == 0 {
-            tracker.init(&frame, BoundingBox::new(f32_at(0), f32_at(4), f32_at(8), f32_at(12)))
-        } else {
-            tracker.step(&frame)
-        };
+        let result = if i == 0 { tracker.init(&frame, meta.truth) } else { tracker.step(&frame) };
         let t1 = cortex_m::peripheral::SYST::get_current();
         // SysTick counts down and wraps at 2^24; one step is far shorter.
         let elapsed = t0.wrapping_sub(t1) & 0x00ff_ffff;

@@ -1,0 +1,59 @@
+//! Prints the bit-exact trace of a fixture, one line per frame, exactly as
+//! the firmware prints it (same tracker type, configuration and seed), so
+//! that runs on different machines can be compared with `diff`. It depends
+//! on nothing but the core and the fixture codecs, so it also builds for an
+//! ARMv6 Linux device (see the README).
+//!
+//! Usage: pftrack-trace FIXTURE [SEED]
+
+use pftrack::{Config, Frame, Tracker};
+use pftrack_fixture::{HEADER_LEN, Header, RECORD_META_LEN, RecordMeta};
+use std::io::Read;
+use std::process::ExitCode;
+
+/// The firmware's tracker type (firmware/src/main.rs): the defaults.
+type FwTracker = Tracker<100>;
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let Some(path) = args.first() else {
+        eprintln!("usage: pftrack-trace FIXTURE [SEED]");
+        return ExitCode::FAILURE;
+    };
+    let seed = match args.get(1).map(|s| s.parse::<u64>()) {
+        None => 1,
+        Some(Ok(s)) => s,
+        Some(Err(_)) => {
+            eprintln!("error: seed is not a number");
+            return ExitCode::FAILURE;
+        }
+    };
+    match run(path, seed) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {path}: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// Streams the fixture record by record, as the firmware does.
+fn run(path: &str, seed: u64) -> Result<(), String> {
+    let mut file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let mut head = [0u8; HEADER_LEN];
+    file.read_exact(&mut head).map_err(|_| "shorter than a fixture header".to_string())?;
+    let h = Header::parse(&head).map_err(|e| e.to_string())?;
+    let mut tracker = Box::new(FwTracker::new(Config::default(), seed).map_err(|e| e.to_string())?);
+    let mut meta = [0u8; RECORD_META_LEN];
+    let mut pixels = vec![0u8; h.frame_len()];
+    for i in 0..h.frames {
+        if file.read_exact(&mut meta).and_then(|_| file.read_exact(&mut pixels)).is_err() {
+            return Err(format!("file ends inside frame {i}"));
+        }
+        let m = RecordMeta::parse(&meta, i).map_err(|e| e.to_string())?;
+        let frame = Frame::new(&pixels, h.width, h.height, h.stride, h.format).map_err(|e| e.to_string())?;
+        let est = if i == 0 { tracker.init(&frame, m.truth) } else { tracker.step(&frame) };
+        println!("{i} {}", est.map_err(|e| format!("frame {i}: {e}"))?.trace());
+    }
+    Ok(())
+}
