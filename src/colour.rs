@@ -1,5 +1,7 @@
 //! Colour quantisation: how a pixel's colour maps to a histogram bin.
 
+use crate::frame::PixelRead;
+
 /// How a colour maps to a histogram bin. A component of the configuration;
 /// a histogram's capacity `K` must be at least [`Binning::bins`].
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, Default)]
@@ -30,6 +32,22 @@ impl Binning {
             Binning::Rgb8x8x8 => ((rgb[0] as usize >> 5) << 6) | ((rgb[1] as usize >> 5) << 3) | (rgb[2] as usize >> 5),
             Binning::Hsv8x8x4 => hsv_bin(rgb),
         }
+    }
+}
+
+/// A binning compiled into the histogram loop (a zero-sized type), so the
+/// loop has no per-pixel branch on the choice.
+pub(crate) trait Quantise {
+    /// The bin of pixel `x` of `row` in format `P`.
+    fn bin<P: PixelRead>(row: &[u8], x: usize) -> Option<usize>;
+}
+
+/// [`Binning::Rgb8x8x8`], compiled in.
+pub(crate) struct Rgb8x8x8;
+impl Quantise for Rgb8x8x8 {
+    #[inline(always)]
+    fn bin<P: PixelRead>(row: &[u8], x: usize) -> Option<usize> {
+        P::rgb_8x8x8(row, x)
     }
 }
 

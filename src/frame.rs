@@ -185,6 +185,13 @@ pub(crate) trait PixelRead {
     fn luma(row: &[u8], x: usize) -> Option<u8> {
         Self::rgb(row, x).map(luma)
     }
+
+    /// The RGB 8x8x8 bin of pixel `x`: the top three bits of each channel.
+    /// Formats that can take them straight from their packed bits do.
+    #[inline(always)]
+    fn rgb_8x8x8(row: &[u8], x: usize) -> Option<usize> {
+        Self::rgb(row, x).map(|[r, g, b]| ((r as usize >> 5) << 6) | ((g as usize >> 5) << 3) | (b as usize >> 5))
+    }
 }
 
 /// BT.601 luma of 8-bit RGB, in 8-bit fixed point (the same weights as
@@ -214,6 +221,17 @@ impl PixelRead for Rgb565 {
         let g = ((v >> 5) & 0x3f) as u8;
         let b = (v & 0x1f) as u8;
         Some([(r << 3) | (r >> 2), (g << 2) | (g >> 4), (b << 3) | (b >> 2)])
+    }
+
+    /// The top three bits of the expanded channels are the top three of the
+    /// packed ones (bit replication only fills low bits): red 15..13, green
+    /// 10..8, blue 4..2.
+    #[inline(always)]
+    fn rgb_8x8x8(row: &[u8], x: usize) -> Option<usize> {
+        let lo = *row.get(2 * x)? as usize;
+        let hi = *row.get(2 * x + 1)? as usize;
+        let v = lo | (hi << 8);
+        Some(((v >> 13) << 6) | (((v >> 8) & 7) << 3) | ((v >> 2) & 7))
     }
 }
 
@@ -343,6 +361,18 @@ mod tests {
 
         let f = Frame::packed(&[9u8, 77], 2, 1, PixelFormat::Gray8).unwrap_or_else(|e| panic!("{e:?}"));
         assert_eq!(f.rgb(1, 0), Some([77, 77, 77]));
+    }
+
+    #[test]
+    fn rgb565_direct_bins_equal_bins_of_the_expanded_colour() {
+        // Reason: cross-check the shortcut against the definition on every
+        // one of the 65536 RGB565 values.
+        for v in 0..=u16::MAX {
+            let px = v.to_le_bytes();
+            let [r, g, b] = Rgb565::rgb(&px, 0).unwrap();
+            let want = ((r as usize >> 5) << 6) | ((g as usize >> 5) << 3) | (b as usize >> 5);
+            assert_eq!(Rgb565::rgb_8x8x8(&px, 0), Some(want), "{v:#06x}");
+        }
     }
 
     #[test]

@@ -189,18 +189,16 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
     /// Histograms of ellipse `e`, left in `self` (for a model update).
     fn observe(&mut self, cfg: &Config, frame: &Frame<'_>, e: &Ellipse, edges: bool) {
         let lattice = Lattice::new(cfg.sampling, cfg.max_samples, e.hx, e.hy);
-        if edges {
-            // One walk over the region feeds both cues.
-            let Scratch { colour, edge, map } = self;
-            edge.clear();
-            colour.compute_with(frame, e, cfg.binning, lattice, |x, y, w| {
-                if let Some(bin) = map.bin_at(x, y) {
-                    edge.add(bin, w);
-                }
-            });
-        } else {
-            self.colour.compute_on(frame, e, cfg.binning, lattice);
-        }
+        // One walk over the region feeds both cues. A single closure type,
+        // with the edge cue switched by a flag, keeps one compiled loop per
+        // pixel format instead of two (flash is scarce on the targets).
+        let Scratch { colour, edge, map } = self;
+        edge.clear();
+        colour.compute_with(frame, e, cfg.binning, lattice, |x, y, w| {
+            if edges && let Some(bin) = map.bin_at(x, y) {
+                edge.add(bin, w);
+            }
+        });
     }
 
     /// How ellipse `e` compares with `models`: (colour ρ, combined similarity),
