@@ -278,8 +278,8 @@ pub struct Tracker<const N: usize, const K: usize = 512, const E: usize = 4096, 
     config: Config,
     rng: R,
     particles: [Particle; N],
-    /// Where resampling writes before the set is swapped in.
-    resampled: [Particle; N],
+    /// Copies per particle while resampling in place.
+    copies: [u16; N],
     /// Normalised weights of `particles` after a step.
     weights: [Real; N],
     scratch: Scratch<K, E>,
@@ -311,7 +311,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
             config,
             rng,
             particles: [Particle::default(); N],
-            resampled: [Particle::default(); N],
+            copies: [0; N],
             weights: [1.0 / N as Real; N],
             scratch: Scratch { colour: Histogram::new(), edge: Histogram::new(), map: EdgeMap::new() },
             target: None,
@@ -473,8 +473,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         let bounds = Bounds { width: size.0 as Real, height: size.1 as Real, min_half: cfg.min_half_axis };
 
         // 1. Resample in proportion to the last step's weights, 2. propagate.
-        resample(&self.particles, &mut self.weights, &mut self.resampled, cfg.resampling, &mut self.rng);
-        self.particles = self.resampled;
+        resample(&mut self.particles, &mut self.weights, &mut self.copies, cfg.resampling, &mut self.rng);
         for p in self.particles.iter_mut() {
             cfg.dynamics.propagate(p, &bounds, &mut self.rng);
         }
@@ -482,8 +481,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
             // Keep exploring: re-draw a fraction of the particles anywhere.
             let reseed = (cfg.reseed_fraction * N as Real) as usize;
             let (hx, hy) = target.half_axes;
-            // Spread over the set: systematic resampling leaves it ordered by
-            // parent, and the first few would all be descendants of one.
+            // Spread over the set: copies of one parent tend to sit together.
             let stride = N.checked_div(reseed).unwrap_or(N);
             for p in self.particles.iter_mut().step_by(stride.max(1)).take(reseed) {
                 *p = uniform_particle(&mut self.rng, size.0, size.1, hx, hy);
