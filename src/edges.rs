@@ -11,6 +11,7 @@
 //! histograms make, with no allocation and a bounded cost.
 
 use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
+use crate::histogram::{Histogram, RowSink};
 
 /// Directions at `k · 11.25°` for `k = 0..16`, as `(cos, sin) · 4096`: the
 /// orientation bin boundaries for 2, 4, 8 or 16 bins over 0–180°.
@@ -194,6 +195,45 @@ impl<const E: usize> EdgeMap<E> {
     }
 }
 
+/// Feeds a region walk's samples into an edge-orientation histogram (see
+/// [`crate::histogram::RowSink`]), looking each map row up once per pixel row.
+pub(crate) struct EdgeSink<'a, const E: usize, const B: usize> {
+    map: &'a EdgeMap<E>,
+    hist: &'a mut Histogram<B>,
+    /// The current row's cells: empty when the row is outside the map, or
+    /// when the sink is switched off.
+    cells: &'a [u8],
+    on: bool,
+}
+
+impl<'a, const E: usize, const B: usize> EdgeSink<'a, E, B> {
+    /// A sink into `hist` (which it clears), reading `map`; `on == false`
+    /// makes it take nothing, so one compiled loop serves both cases.
+    pub(crate) fn new(map: &'a EdgeMap<E>, hist: &'a mut Histogram<B>, on: bool) -> Self {
+        hist.clear();
+        EdgeSink { map, hist, cells: &[], on }
+    }
+}
+
+impl<const E: usize, const B: usize> RowSink for EdgeSink<'_, E, B> {
+    #[inline(always)]
+    fn row(&mut self, y: usize) {
+        let m = self.map;
+        let j = y.wrapping_sub(m.y0) >> m.shift;
+        self.cells = if self.on && j < m.rows { m.cells.get(j * m.cols..(j + 1) * m.cols).unwrap_or(&[]) } else { &[] };
+    }
+
+    #[inline(always)]
+    fn pixel(&mut self, x: usize, w: u32) {
+        // Left of the map the subtraction wraps to a huge index: no cell.
+        if let Some(&v) = self.cells.get(x.wrapping_sub(self.map.x0) >> self.map.shift)
+            && v != NONE
+        {
+            self.hist.add(v as usize, w);
+        }
+    }
+}
+
 /// Sobel gradients of a 3x3 window given row by row (the centre is unused).
 /// `gx` is positive where brightness grows to the right, `gy` downwards.
 pub fn sobel(p: [i32; 9]) -> (i32, i32) {
@@ -207,7 +247,6 @@ pub fn sobel(p: [i32; 9]) -> (i32, i32) {
 mod tests {
     use super::*;
     use crate::geometry::Ellipse;
-    use crate::histogram::Histogram;
     use crate::region::{Lattice, Sampling, for_each_in_ellipse};
 
     #[test]

@@ -13,7 +13,7 @@
 use crate::colour::{Binning, Quantise, Rgb8x8x8};
 use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
 use crate::geometry::Ellipse;
-use crate::region::{Lattice, Sampling, for_each_in_ellipse};
+use crate::region::{Lattice, Sampling, for_each_row};
 use crate::scalar::{Real, sqrt_q4};
 
 /// A kernel-weighted histogram with capacity for `K` bins: raw integer
@@ -52,11 +52,14 @@ impl<const K: usize> Histogram<K> {
         self.total = 0;
     }
 
-    /// Adds `weight` to bin `bin`; bins past `K` are ignored.
+    /// Adds `weight` to bin `bin`; bins past `K` are ignored. Sums wrap past
+    /// `u32::MAX`, which kernel weights over any frame the core accepts
+    /// cannot reach (see [`crate::scalar::KERNEL_ONE`]).
+    #[inline(always)]
     pub fn add(&mut self, bin: usize, weight: u32) {
         if let Some(c) = self.counts.get_mut(bin) {
-            *c = c.saturating_add(weight);
-            self.total = self.total.saturating_add(weight);
+            *c = c.wrapping_add(weight);
+            self.total = self.total.wrapping_add(weight);
         }
     }
 
@@ -82,20 +85,19 @@ impl<const K: usize> Histogram<K> {
 
     /// [`Histogram::compute`] on an explicit lattice.
     pub(crate) fn compute_on(&mut self, frame: &Frame<'_>, e: &Ellipse, binning: Binning, lattice: Lattice) {
-        self.compute_with(frame, e, binning, lattice, |_, _, _| {});
+        self.compute_with(frame, e, binning, lattice, &mut ());
     }
 
-    /// [`Histogram::compute_on`], also calling `also(x, y, weight)` for every
-    /// sample: other cues ride on the same walk over the region instead of
-    /// repeating it.
+    /// [`Histogram::compute_on`], also feeding every sample to `sink`: other
+    /// cues ride on the same walk over the region instead of repeating it.
     #[inline(always)]
-    pub(crate) fn compute_with<F: FnMut(usize, usize, u32)>(
+    pub(crate) fn compute_with<S: RowSink>(
         &mut self,
         frame: &Frame<'_>,
         e: &Ellipse,
         binning: Binning,
         lattice: Lattice,
-        also: F,
+        sink: &mut S,
     ) {
         self.clear();
         // The default binning gets a loop compiled per pixel format; HSV,
@@ -103,21 +105,23 @@ impl<const K: usize> Histogram<K> {
         // the general accessor. Two loops per binning would cost more flash
         // than a small target can spare (measured: +6 KB on Cortex-M4).
         match (binning, frame.format()) {
-            (Binning::Rgb8x8x8, PixelFormat::Rgb565) => self.accumulate::<Rgb565, Rgb8x8x8, F>(frame, e, lattice, also),
-            (Binning::Rgb8x8x8, PixelFormat::Rgb888) => self.accumulate::<Rgb888, Rgb8x8x8, F>(frame, e, lattice, also),
-            (Binning::Rgb8x8x8, PixelFormat::Yuv422) => self.accumulate::<Yuv422, Rgb8x8x8, F>(frame, e, lattice, also),
-            (Binning::Rgb8x8x8, PixelFormat::Gray8) => self.accumulate::<Gray8, Rgb8x8x8, F>(frame, e, lattice, also),
+            (Binning::Rgb8x8x8, PixelFormat::Rgb565) => self.accumulate::<Rgb565, Rgb8x8x8, S>(frame, e, lattice, sink),
+            (Binning::Rgb8x8x8, PixelFormat::Rgb888) => self.accumulate::<Rgb888, Rgb8x8x8, S>(frame, e, lattice, sink),
+            (Binning::Rgb8x8x8, PixelFormat::Yuv422) => self.accumulate::<Yuv422, Rgb8x8x8, S>(frame, e, lattice, sink),
+            (Binning::Rgb8x8x8, PixelFormat::Gray8) => self.accumulate::<Gray8, Rgb8x8x8, S>(frame, e, lattice, sink),
             (Binning::Hsv8x8x4, _) => {
-                let counts = &mut self.counts;
-                let mut total = 0u32;
-                let mut also = also;
-                for_each_in_ellipse(frame, e, lattice, |_, x, y, w| {
-                    also(x, y, w);
-                    if let Some(rgb) = frame.rgb(x, y)
-                        && let Some(c) = counts.get_mut(binning.bin(rgb))
-                    {
-                        *c = c.wrapping_add(w);
-                        total = total.wrapping_add(w);
+                let (counts, mut total) = (&mut self.counts, 0u32);
+                for_each_row(frame, e, lattice, |span| {
+                    let y = span.y;
+                    sink.row(y);
+                    for (x, w) in span {
+                        sink.pixel(x, w);
+                        if let Some(rgb) = frame.rgb(x, y)
+                            && let Some(c) = counts.get_mut(binning.bin(rgb))
+                        {
+                            *c = c.wrapping_add(w);
+                            total = total.wrapping_add(w);
+                        }
                     }
                 });
                 self.total = total;
@@ -126,28 +130,49 @@ impl<const K: usize> Histogram<K> {
     }
 
     #[inline(always)]
-    fn accumulate<P: PixelRead, Q: Quantise, F: FnMut(usize, usize, u32)>(
+    fn accumulate<P: PixelRead, Q: Quantise, S: RowSink>(
         &mut self,
         frame: &Frame<'_>,
         e: &Ellipse,
         lattice: Lattice,
-        mut also: F,
+        sink: &mut S,
     ) {
-        let counts = &mut self.counts;
-        let mut total = 0u32;
-        for_each_in_ellipse(frame, e, lattice, |row, x, y, w| {
-            also(x, y, w);
-            if let Some(bin) = Q::bin::<P>(row, x)
-                && let Some(c) = counts.get_mut(bin)
-            {
-                // Sums stay below 2^32 for any frame within MAX_DIMENSION;
-                // wrapping keeps the loop free of a panic path regardless.
-                *c = c.wrapping_add(w);
-                total = total.wrapping_add(w);
+        let (counts, mut total) = (&mut self.counts, 0u32);
+        for_each_row(frame, e, lattice, |span| {
+            sink.row(span.y);
+            let row = span.row;
+            for (x, w) in span {
+                sink.pixel(x, w);
+                if let Some(bin) = Q::bin::<P>(row, x)
+                    && let Some(c) = counts.get_mut(bin)
+                {
+                    // Sums stay below 2^32 for any frame within MAX_DIMENSION;
+                    // wrapping keeps the loop free of a panic path regardless.
+                    *c = c.wrapping_add(w);
+                    total = total.wrapping_add(w);
+                }
             }
         });
         self.total = total;
     }
+}
+
+/// Something that takes every sample of a region walk, row by row, beside the
+/// colour histogram (the edge cue). `row` comes before each row's pixels, so
+/// per-row work is done once per row.
+pub(crate) trait RowSink {
+    /// Row `y` starts.
+    fn row(&mut self, y: usize);
+    /// Pixel `x` of the current row, with kernel weight `w`.
+    fn pixel(&mut self, x: usize, w: u32);
+}
+
+/// Nothing rides along.
+impl RowSink for () {
+    #[inline(always)]
+    fn row(&mut self, _: usize) {}
+    #[inline(always)]
+    fn pixel(&mut self, _: usize, _: u32) {}
 }
 
 /// The target model: a normalised histogram `q` and its square roots, kept
@@ -248,6 +273,7 @@ pub fn bhattacharyya_distance(rho: Real) -> Real {
 mod tests {
     use super::*;
     use crate::frame::PixelFormat;
+    use crate::region::for_each_in_ellipse;
 
     #[test]
     fn histogram_mass_is_the_kernel_mass() {

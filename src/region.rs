@@ -120,59 +120,118 @@ fn floor(v: Real) -> i32 {
 }
 
 /// The smallest `v >= from` with `v ≡ phase (mod modulus)`, for `from >= 0`.
+#[inline(always)]
 fn align_up(from: i32, modulus: i32, phase: i32) -> i32 {
-    from + (phase - from).rem_euclid(modulus)
+    // Moduli 1 and 2 (every pixel, checkerboard, quarter) are the common
+    // case: no division for them, which a Cortex-M0+ does in software.
+    match modulus {
+        1 => from,
+        2 => from + ((phase - from) & 1),
+        _ => from + (phase - from).rem_euclid(modulus),
+    }
+}
+
+/// The sampled pixels of one row of an ellipse: an iterator over
+/// `(x, kernel weight)`, plus the row's index and pixel bytes.
+pub(crate) struct RowSpan<'a> {
+    /// Row index.
+    pub y: usize,
+    /// The row's pixel bytes.
+    pub row: &'a [u8],
+    x: i32,
+    x_hi: i32,
+    step: i32,
+    cx: i32,
+    ax: u32,
+    ry2: u32,
+}
+
+impl Iterator for RowSpan<'_> {
+    type Item = (usize, u32);
+
+    #[inline(always)]
+    fn next(&mut self) -> Option<(usize, u32)> {
+        let one = 1u32 << RADIUS2_SHIFT;
+        let w_shift = RADIUS2_SHIFT - KERNEL_ONE.trailing_zeros();
+        while self.x <= self.x_hi {
+            let x = self.x;
+            self.x += self.step;
+            let dx = x.abs_diff(self.cx);
+            // dx <= dx_max, so dx²·ax <= one − ry2 < 2^24: no overflow.
+            let r2 = self.ry2 + dx * dx * self.ax;
+            if r2 < one {
+                let w = (one - r2) >> w_shift;
+                if w > 0 {
+                    return Some((x as usize, w));
+                }
+            }
+        }
+        None
+    }
+}
+
+/// Calls `visit` with each row of pixels of `frame` on `lattice` inside
+/// ellipse `e`; each [`RowSpan`] yields the row's sampled pixels with their
+/// kernel weights in `1..=KERNEL_ONE`. Pixels outside the frame are skipped,
+/// so a region partly off-frame is the part that is on it. Row by row, so
+/// that callers can hoist per-row work out of the per-pixel loop.
+#[inline(always)]
+pub(crate) fn for_each_row<F: FnMut(RowSpan<'_>)>(frame: &Frame<'_>, e: &Ellipse, lattice: Lattice, mut visit: F) {
+    let Some(r) = Raster::new(e) else { return };
+    let one = 1u32 << RADIUS2_SHIFT;
+    let (width, height) = (frame.width() as i32, frame.height() as i32);
+    let s = lattice.step as i32;
+    let y_lo = align_up((r.cy - r.ry).max(0), s, 0);
+    let y_hi = (r.cy + r.ry).min(height - 1);
+    let mut y = y_lo;
+    // The widest |dx| of the previous row: a row's width differs little from
+    // its neighbour's, so walking from it is cheaper than a square root.
+    let mut dx_max: u32 = 0;
+    while y <= y_hi {
+        let dy = y.abs_diff(r.cy);
+        if let Some(ry2) = dy.checked_mul(dy).and_then(|d| d.checked_mul(r.ay)).filter(|&v| v < one)
+            && let Some(row) = frame.row(y as usize)
+        {
+            let rem = u64::from(one - ry2);
+            // Widest |dx| with dx²·ax <= rem (the same as isqrt(rem / ax)).
+            let ax = u64::from(r.ax);
+            let fits = |d: u32| u64::from(d) * u64::from(d) * ax <= rem;
+            while !fits(dx_max) && dx_max > 0 {
+                dx_max -= 1;
+            }
+            while fits(dx_max + 1) {
+                dx_max += 1;
+            }
+            let dx_max = dx_max as i32;
+            let x_lo = (r.cx - dx_max).max(0);
+            let x_hi = (r.cx + dx_max).min(width - 1);
+            // On a checkerboard of s-sized cells, odd cell rows start one cell in.
+            let (x, step) = if lattice.checker {
+                (align_up(x_lo, 2 * s, ((y / s) % 2) * s), 2 * s)
+            } else {
+                (align_up(x_lo, s, 0), s)
+            };
+            visit(RowSpan { y: y as usize, row, x, x_hi, step, cx: r.cx, ax: r.ax, ry2 });
+        }
+        y += s;
+    }
 }
 
 /// Calls `visit(row, x, y, weight)` for every pixel of `frame` on `lattice`
-/// inside ellipse `e`, with its kernel weight in `1..=KERNEL_ONE`. Pixels
-/// outside the frame are skipped, so a region partly off-frame is the part
-/// that is on it. `row` is row `y`'s pixel bytes.
-#[inline(always)]
+/// inside ellipse `e` (see [`for_each_row`]): the per-pixel form, for tests.
+#[cfg(test)]
 pub(crate) fn for_each_in_ellipse<F: FnMut(&[u8], usize, usize, u32)>(
     frame: &Frame<'_>,
     e: &Ellipse,
     lattice: Lattice,
     mut visit: F,
 ) {
-    let Some(r) = Raster::new(e) else { return };
-    let one = 1u32 << RADIUS2_SHIFT;
-    let w_shift = RADIUS2_SHIFT - KERNEL_ONE.trailing_zeros();
-    let (width, height) = (frame.width() as i32, frame.height() as i32);
-    let s = lattice.step as i32;
-    let y_lo = align_up((r.cy - r.ry).max(0), s, 0);
-    let y_hi = (r.cy + r.ry).min(height - 1);
-    let mut y = y_lo;
-    while y <= y_hi {
-        let dy = y.abs_diff(r.cy);
-        let Some(ry2) = dy.checked_mul(dy).and_then(|d| d.checked_mul(r.ay)).filter(|&v| v < one) else {
-            y += s;
-            continue;
-        };
-        let rem = one - ry2;
-        // Widest |dx| with dx²·ax <= rem; ax >= 1 so the division is safe.
-        let dx_max = (rem / r.ax.max(1)).isqrt() as i32;
-        let x_lo = (r.cx - dx_max).max(0);
-        let x_hi = (r.cx + dx_max).min(width - 1);
-        // On a checkerboard of s-sized cells, odd cell rows start one cell in.
-        let (mut x, x_step) =
-            if lattice.checker { (align_up(x_lo, 2 * s, ((y / s) % 2) * s), 2 * s) } else { (align_up(x_lo, s, 0), s) };
-        if let Some(row) = frame.row(y as usize) {
-            while x <= x_hi {
-                let dx = x.abs_diff(r.cx);
-                // dx <= dx_max, so dx²·ax <= rem < 2^24: no overflow.
-                let r2 = ry2 + dx * dx * r.ax;
-                if r2 < one {
-                    let w = (one - r2) >> w_shift;
-                    if w > 0 {
-                        visit(row, x as usize, y as usize, w);
-                    }
-                }
-                x += x_step;
-            }
+    for_each_row(frame, e, lattice, |span| {
+        let (y, row) = (span.y, span.row);
+        for (x, w) in span {
+            visit(row, x, y, w);
         }
-        y += s;
-    }
+    });
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 //! model and explicit searching / tracking / lost states.
 
 use crate::config::{Config, MAX_EDGE_BINS};
-use crate::edges::{EdgeMap, EdgeParams};
+use crate::edges::{EdgeMap, EdgeParams, EdgeSink};
 use crate::error::{ConfigError, Error, ParamProblem, RegionError};
 use crate::filter::{Bounds, Particle, mean_state, resample};
 use crate::frame::Frame;
@@ -189,16 +189,11 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
     /// Histograms of ellipse `e`, left in `self` (for a model update).
     fn observe(&mut self, cfg: &Config, frame: &Frame<'_>, e: &Ellipse, edges: bool) {
         let lattice = Lattice::new(cfg.sampling, cfg.max_samples, e.hx, e.hy);
-        // One walk over the region feeds both cues. A single closure type,
-        // with the edge cue switched by a flag, keeps one compiled loop per
-        // pixel format instead of two (flash is scarce on the targets).
+        // One walk over the region feeds both cues. One sink type, switched
+        // by a flag, keeps one compiled loop per pixel format instead of two
+        // (flash is scarce on the targets).
         let Scratch { colour, edge, map } = self;
-        edge.clear();
-        colour.compute_with(frame, e, cfg.binning, lattice, |x, y, w| {
-            if edges && let Some(bin) = map.bin_at(x, y) {
-                edge.add(bin, w);
-            }
-        });
+        colour.compute_with(frame, e, cfg.binning, lattice, &mut EdgeSink::new(map, edge, edges));
     }
 
     /// How ellipse `e` compares with `models`: (colour ρ, combined similarity),
