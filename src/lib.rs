@@ -46,6 +46,7 @@ pub mod config;
 pub mod edges;
 pub mod error;
 pub mod filter;
+pub mod follower;
 pub mod frame;
 pub mod geometry;
 pub mod histogram;
