@@ -149,6 +149,11 @@ impl<'a> Frame<'a> {
     /// The pixel bytes of row `y` (exactly `width * bytes_per_pixel` bytes),
     /// or `None` past the last row.
     pub fn row(&self, y: usize) -> Option<&'a [u8]> {
+        // The buffer may be longer than the frame: bound by the height, not
+        // only by the bytes (found by fuzzing `frame_new`).
+        if y >= self.height {
+            return None;
+        }
         let start = y.checked_mul(self.stride)?;
         let len = self.width * self.format.bytes_per_pixel();
         self.data.get(start..start.checked_add(len)?)
@@ -344,6 +349,10 @@ mod tests {
         );
         assert_eq!(f.rgb(2, 1), None);
         assert_eq!(f.rgb(0, 2), None);
+        // Rows past the height are not rows, even when the buffer goes on.
+        let long = [0u8; 64];
+        let f = Frame::new(&long, 2, 2, 6, PixelFormat::Rgb565).unwrap_or_else(|e| panic!("{e:?}"));
+        assert!(f.row(1).is_some() && f.row(2).is_none());
 
         let buf888 = [1u8, 2, 3, 200, 100, 50];
         let f = Frame::packed(&buf888, 2, 1, PixelFormat::Rgb888).unwrap_or_else(|e| panic!("{e:?}"));
