@@ -25,6 +25,8 @@ pub struct Run {
     pub step_ms: Vec<f64>,
     /// The appearance threshold the tracker learnt at initialisation.
     pub threshold: f32,
+    /// Every 4th particle's centre after each step (for pictures).
+    pub particles: Vec<Vec<(f32, f32)>>,
 }
 
 /// Tracks `frames`, initialised on the first with `init`. `progress` is
@@ -44,6 +46,7 @@ pub fn track<'a>(
         estimates: Vec::new(),
         step_ms: Vec::new(),
         threshold: tracker.appearance_threshold().unwrap_or(0.0),
+        particles: Vec::new(),
     };
     for (i, f) in frames.iter().enumerate().skip(1) {
         let t0 = Instant::now();
@@ -51,6 +54,7 @@ pub fn track<'a>(
         run.step_ms.push(t0.elapsed().as_secs_f64() * 1e3);
         run.boxes.push(est.bbox());
         run.estimates.push(est);
+        run.particles.push(tracker.particles().iter().step_by(4).map(|p| (p.x, p.y)).collect());
         progress(i + 1, frames.len());
     }
     Ok(run)

@@ -31,6 +31,11 @@ struct Common {
     /// Also print every frame's estimate: state, event, confidence, appearing particles, box and truth.
     #[arg(long)]
     frames: bool,
+    /// Also write `<sequence>.gif` (every frame annotated: estimate in white,
+    /// ground truth in cyan, particles in magenta, a status bar coloured by
+    /// state, as long as the confidence) and `<sequence>.png` (one frame of it).
+    #[arg(long)]
+    gif: bool,
     /// Override a configuration field, e.g. `--set sampling=checkerboard --set eps=0.01`
     /// (repeatable; an unknown key lists the known ones).
     #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -241,11 +246,40 @@ fn print_frames(seq: &Loaded, run: &Run) {
     }
 }
 
+/// The annotated animation of a run, and its middle frame as a PNG.
+fn write_pictures(seq: &Loaded, run: &Run, dir: &Path) -> Result<(), String> {
+    use host_tests::picture::{Canvas, annotate, write_gif, write_png};
+    // Small frames are enlarged so the overlay stays legible.
+    let k = (480 / seq.width.max(1)).clamp(1, 4);
+    // At most 300 frames in the animation, evenly spaced.
+    let every = seq.frames.len().div_ceil(300).max(1);
+    let mut canvases = Vec::new();
+    for (i, px) in seq.frames.iter().enumerate().step_by(every) {
+        let f = Frame::new(px, seq.width, seq.height, seq.stride, seq.format).map_err(|e| e.to_string())?;
+        let mut c = Canvas::new(seq.width, seq.height, host_tests::scene::to_rgb(&f));
+        let truth = seq.truth.get(i).filter(|t| has_target(t));
+        let (est, parts) = match i.checked_sub(1) {
+            Some(j) => (run.estimates.get(j), run.particles.get(j).map(Vec::as_slice).unwrap_or(&[])),
+            None => (None, &[][..]),
+        };
+        annotate(&mut c, est, truth, parts);
+        canvases.push(c.scaled(k));
+    }
+    write_gif(&dir.join(format!("{}.gif", seq.name)), &canvases, 66)?;
+    if let Some(mid) = canvases.get(canvases.len() / 2) {
+        write_png(&dir.join(format!("{}.png", seq.name)), mid)?;
+    }
+    Ok(())
+}
+
 fn run_one(path: &Path, common: &Common) -> Result<Row, String> {
     let seq = load(path)?;
     let (row, run) = evaluate(&seq, common.config, common.seed)?;
     if common.frames {
         print_frames(&seq, &run);
+    }
+    if common.gif {
+        write_pictures(&seq, &run, &common.out_dir)?;
     }
     let out = common.out_dir.join(format!("{}.txt", seq.name));
     let text: String =
