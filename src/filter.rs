@@ -240,17 +240,22 @@ mod tests {
         Bounds { width: 1000.0, height: 1000.0, min_half: 1.0 }
     }
 
-    #[test]
-    fn noiseless_dynamics_are_constant_velocity() {
-        // Reason: with zero noise, s_t = A s_{t-1}: the centre advances by the
-        // velocity each frame and the size grows by (1 + ȧ).
-        let d = Dynamics {
+    /// Constant velocity with no noise at all.
+    fn still() -> Dynamics {
+        Dynamics {
             position_noise: 0.0,
             velocity_noise: 0.0,
             velocity_decay: 1.0,
             scale_noise: 0.0,
             scale_rate_noise: 0.0,
-        };
+        }
+    }
+
+    #[test]
+    fn noiseless_dynamics_are_constant_velocity() {
+        // Reason: with zero noise, s_t = A s_{t-1}: the centre advances by the
+        // velocity each frame and the size grows by (1 + ȧ).
+        let d = still();
         let mut p = Particle { x: 100.0, y: 200.0, vx: 3.0, vy: -2.0, hx: 10.0, hy: 20.0, a_dot: 0.05 };
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(1);
         for _ in 0..10 {
@@ -266,13 +271,7 @@ mod tests {
     fn position_noise_has_the_configured_spread() {
         // Reason: for a 20x20 particle s = 20, so position noise 0.1 gives a
         // one-step standard deviation of 2 px around the predicted centre.
-        let d = Dynamics {
-            position_noise: 0.1,
-            velocity_noise: 0.0,
-            velocity_decay: 1.0,
-            scale_noise: 0.0,
-            scale_rate_noise: 0.0,
-        };
+        let d = Dynamics { position_noise: 0.1, ..still() };
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(7);
         let n = 20_000;
         let (mut s1, mut s2) = (0.0f64, 0.0f64);
@@ -291,13 +290,7 @@ mod tests {
 
     #[test]
     fn centre_stays_in_frame_and_stops_at_the_border() {
-        let d = Dynamics {
-            position_noise: 0.0,
-            velocity_noise: 0.0,
-            velocity_decay: 1.0,
-            scale_noise: 0.0,
-            scale_rate_noise: 0.0,
-        };
+        let d = still();
         let mut p = Particle { x: 5.0, y: 5.0, vx: -10.0, vy: 0.0, hx: 4.0, hy: 4.0, a_dot: 0.0 };
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(1);
         d.propagate(&mut p, &bounds(), &mut rng);

@@ -241,6 +241,26 @@ mod tests {
         vec![PwmT::max_duty_cycle(1000), PwmT::set_duty_cycle(CENTRE)]
     }
 
+    /// Runs the default head over `frames` (centre x, centre y, state) in a
+    /// 320x240 frame, expecting exactly the pan duties `pan_duties` after the
+    /// centring write, no tilt write after it, and the LED states `led` after
+    /// the initial "off". Returns the final position.
+    fn drive(pan_duties: &[u16], led: &[State], frames: &[(Real, Real, TrackState)]) -> (Real, Real) {
+        let mut pan_t = start();
+        pan_t.extend(pan_duties.iter().map(|&d| PwmT::set_duty_cycle(d)));
+        let mut led_t = vec![PinT::set(State::Low)];
+        led_t.extend(led.iter().map(|&s| PinT::set(s)));
+        let (mut pan, mut tilt, mut pin) = (Pwm::new(&pan_t), Pwm::new(&start()), Pin::new(&led_t));
+        let mut head = PanTilt::new(pan.clone(), tilt.clone(), pin.clone(), FollowerConfig::default()).unwrap();
+        for &(cx, cy, state) in frames {
+            head.update(&estimate(cx, cy, state), 320, 240).unwrap();
+        }
+        pan.done();
+        tilt.done();
+        pin.done();
+        head.position()
+    }
+
     #[test]
     fn target_to_the_left_turns_the_pan_servo_left() {
         // Reason, by hand: the target's centre is at 80 of 320 px, offset −0.5;
@@ -248,18 +268,9 @@ mod tests {
         // the pan position goes 0.5 → 0.475: duty (0.05 + 0.475 · 0.05) · 1000
         // = 73.75 → 74. The next frame, same offset: u = −0.025 again → 0.45,
         // duty 72.5 → 73 (rounded half up). Tilt is centred: never written.
-        let mut pan_t = start();
-        pan_t.extend([PwmT::set_duty_cycle(74), PwmT::set_duty_cycle(73)]);
-        let mut pan = Pwm::new(&pan_t);
-        let mut tilt = Pwm::new(&start());
-        let mut led = Pin::new(&[PinT::set(State::Low), PinT::set(State::High), PinT::set(State::High)]);
-        let mut head = PanTilt::new(pan.clone(), tilt.clone(), led.clone(), FollowerConfig::default()).unwrap();
-        head.update(&estimate(80.0, 120.0, TrackState::Tracking), 320, 240).unwrap();
-        head.update(&estimate(80.0, 120.0, TrackState::Tracking), 320, 240).unwrap();
-        assert!(head.position().0 < 0.5);
-        pan.done();
-        tilt.done();
-        led.done();
+        let tracked = (80.0, 120.0, TrackState::Tracking);
+        let (pan, _) = drive(&[74, 73], &[State::High, State::High], &[tracked, tracked]);
+        assert!(pan < 0.5);
     }
 
     #[test]
@@ -267,48 +278,25 @@ mod tests {
         // Reason, by hand: offsets −0.5 then −0.75: the second command is
         // 0.05 · (−0.75) + 0.02 · (−0.25) = −0.0425, position 0.475 → 0.4325,
         // duty 71.625 → 72.
-        let mut pan_t = start();
-        pan_t.extend([PwmT::set_duty_cycle(74), PwmT::set_duty_cycle(72)]);
-        let mut pan = Pwm::new(&pan_t);
-        let mut tilt = Pwm::new(&start());
-        let mut led = Pin::new(&[PinT::set(State::Low), PinT::set(State::High), PinT::set(State::High)]);
-        let mut head = PanTilt::new(pan.clone(), tilt.clone(), led.clone(), FollowerConfig::default()).unwrap();
-        head.update(&estimate(80.0, 120.0, TrackState::Tracking), 320, 240).unwrap();
-        head.update(&estimate(40.0, 120.0, TrackState::Tracking), 320, 240).unwrap();
-        pan.done();
-        tilt.done();
-        led.done();
+        let frames = [(80.0, 120.0, TrackState::Tracking), (40.0, 120.0, TrackState::Tracking)];
+        drive(&[74, 72], &[State::High, State::High], &frames);
     }
 
     #[test]
     fn inside_the_dead_zone_nothing_moves() {
         // Reason: an offset of 0.05 (168 of 320 px) is under the 0.1 dead
         // zone on both axes: no duty is written, only the LED goes on.
-        let mut pan = Pwm::new(&start());
-        let mut tilt = Pwm::new(&start());
-        let mut led = Pin::new(&[PinT::set(State::Low), PinT::set(State::High)]);
-        let mut head = PanTilt::new(pan.clone(), tilt.clone(), led.clone(), FollowerConfig::default()).unwrap();
-        head.update(&estimate(168.0, 126.0, TrackState::Tracking), 320, 240).unwrap();
-        assert_eq!(head.position(), (0.5, 0.5));
-        pan.done();
-        tilt.done();
-        led.done();
+        let position = drive(&[], &[State::High], &[(168.0, 126.0, TrackState::Tracking)]);
+        assert_eq!(position, (0.5, 0.5));
     }
 
     #[test]
     fn lost_holds_position_and_turns_the_led_off() {
         // Reason: while lost the estimate is not the target; the head must not
         // chase it. The target far to the right writes nothing, LED low.
-        let mut pan = Pwm::new(&start());
-        let mut tilt = Pwm::new(&start());
-        let mut led = Pin::new(&[PinT::set(State::Low), PinT::set(State::Low), PinT::set(State::Low)]);
-        let mut head = PanTilt::new(pan.clone(), tilt.clone(), led.clone(), FollowerConfig::default()).unwrap();
-        head.update(&estimate(310.0, 10.0, TrackState::Lost), 320, 240).unwrap();
-        head.update(&estimate(310.0, 10.0, TrackState::Searching), 320, 240).unwrap();
-        assert_eq!(head.position(), (0.5, 0.5));
-        pan.done();
-        tilt.done();
-        led.done();
+        let frames = [(310.0, 10.0, TrackState::Lost), (310.0, 10.0, TrackState::Searching)];
+        let position = drive(&[], &[State::Low, State::Low], &frames);
+        assert_eq!(position, (0.5, 0.5));
     }
 
     #[test]
