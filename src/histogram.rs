@@ -157,6 +157,31 @@ impl<const K: usize> Histogram<K> {
     }
 }
 
+/// Calls `visit(x, y, bin)` for every sample of ellipse `e` on `lattice`:
+/// the region walk of [`Histogram::compute_on`], for algorithms that need
+/// each pixel's bin and place (mean shift).
+pub(crate) fn for_each_bin<F: FnMut(usize, usize, usize)>(
+    frame: &Frame<'_>,
+    e: &Ellipse,
+    binning: Binning,
+    lattice: Lattice,
+    mut visit: F,
+) {
+    for_each_row(frame, e, lattice, |span| {
+        let y = span.y;
+        let row = span.row;
+        for (x, _) in span {
+            let bin = match (binning, frame.format()) {
+                (Binning::Rgb8x8x8, PixelFormat::Rgb565) => Rgb8x8x8::bin::<Rgb565>(row, x),
+                _ => frame.rgb(x, y).map(|rgb| binning.bin(rgb)),
+            };
+            if let Some(bin) = bin {
+                visit(x, y, bin);
+            }
+        }
+    });
+}
+
 /// Something that takes every sample of a region walk, row by row, beside the
 /// colour histogram (the edge cue). `row` comes before each row's pixels, so
 /// per-row work is done once per row.
@@ -223,6 +248,11 @@ impl<const K: usize> Model<K> {
             // sqrt(q · 2^16 · 2^8) = sqrt(q_real) · 2^12
             *s = ((q as u32) << 8).isqrt() as u16;
         }
+    }
+
+    /// `sqrt(q(u))` per bin, in units of `2^-12`.
+    pub(crate) fn sqrt_bins(&self) -> &[u16; K] {
+        &self.sqrt_q
     }
 
     /// The normalised bins, in units of `2^-16`.

@@ -15,6 +15,8 @@
 //! - [`Histogram`], [`Model`]: integer kernel-weighted histograms and the
 //!   target model with its Bhattacharyya coefficient.
 //! - [`Tracker`]: the filter and its life cycle, configured by [`Config`].
+//! - [`MeanShift`]: the single-hypothesis baselines (mean shift, Kalman mean
+//!   shift) on the same frames, histograms and estimates.
 //!
 //! # Numbers
 //! One convention, in [`scalar`]: integers per pixel, `f32` per particle,
@@ -51,6 +53,7 @@ pub mod frame;
 pub mod geometry;
 pub mod histogram;
 pub mod likelihood;
+pub mod meanshift;
 pub mod region;
 pub mod scalar;
 pub mod tracker;
@@ -64,6 +67,7 @@ pub use frame::{Frame, PixelFormat};
 pub use geometry::{BoundingBox, Ellipse};
 pub use histogram::{Histogram, Model};
 pub use likelihood::{Combination, Likelihood, Sigma};
+pub use meanshift::{MeanShift, MeanShiftConfig, Prediction};
 pub use region::Sampling;
 pub use scalar::Real;
 pub use tracker::{Estimate, Event, Trace, TrackState, Tracker};

@@ -4,7 +4,8 @@
 //! instruction counts, peak stack and a verdict. Exits 0 on success.
 //!
 //! Run it with `cargo qemu fixtures/occlusion.pft 1` (QEMU's MPS2 AN386
-//! board; see the README).
+//! board; see the README). A third word picks the tracker: `pf` (the
+//! particle filter, default), `meanshift` or `kalman` (the baselines).
 #![no_std]
 #![no_main]
 
@@ -17,7 +18,7 @@ use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
 use cortex_m_semihosting::hio;
 #[cfg(feature = "defmt")]
 use defmt_semihosting as _;
-use pftrack::{Config, Frame, Tracker};
+use pftrack::{BoundingBox, Config, Estimate, Frame, MeanShift, MeanShiftConfig, Tracker};
 use pftrack_fixture::{HEADER_LEN, Header, RECORD_META_LEN, RecordMeta};
 
 /// The largest frame the firmware holds: QVGA RGB565. Frames are streamed
@@ -32,6 +33,39 @@ const PAINT: u32 = 0x5afe_c0de;
 
 /// The tracker lives in a static, not on the stack: it is the largest object.
 type FwTracker = Tracker<100>;
+
+/// The tracker this run uses, in its static.
+enum Any {
+    Pf(&'static mut FwTracker),
+    MeanShift(&'static mut MeanShift),
+}
+
+// Each tracker's calls stay out of line: inlined into one dispatching
+// function, their stack frames would merge and every run would pay for the
+// larger (measured: +2 KB of peak stack for the particle filter).
+impl Any {
+    #[inline(never)]
+    fn init(&mut self, frame: &Frame<'_>, bbox: BoundingBox) -> Result<Estimate, pftrack::Error> {
+        match self {
+            Any::Pf(t) => pf_init(t, frame, bbox),
+            Any::MeanShift(t) => ms_init(t, frame, bbox),
+        }
+    }
+
+    fn step(&mut self, frame: &Frame<'_>) -> Result<Estimate, pftrack::Error> {
+        match self {
+            Any::Pf(t) => pf_step(t, frame),
+            Any::MeanShift(t) => ms_step(t, frame),
+        }
+    }
+
+    fn ram(&self) -> usize {
+        match self {
+            Any::Pf(_) => core::mem::size_of::<FwTracker>(),
+            Any::MeanShift(_) => core::mem::size_of::<MeanShift>(),
+        }
+    }
+}
 
 #[entry]
 fn main() -> ! {
@@ -62,6 +96,7 @@ fn run() -> bool {
         Some(Ok(s)) => s,
         Some(Err(_)) => fail!("seed is not a number"),
     };
+    let kind = words.next().unwrap_or("pf");
     let Some(mut file) = host::HostFile::open(path) else { fail!("cannot open {path}") };
 
     let mut header = [0u8; HEADER_LEN];
@@ -80,7 +115,13 @@ fn run() -> bool {
 
     let Some(pixels) = cortex_m::singleton!(: [u8; FRAME_BYTES] = [0; FRAME_BYTES]) else { fail!("buffer taken") };
     let Some(ticks) = cortex_m::singleton!(: [u32; MAX_FRAMES] = [0; MAX_FRAMES]) else { fail!("buffer taken") };
-    let tracker = match make_tracker(seed) {
+    let made = match kind {
+        "pf" => make_tracker(seed).map(|t| t.map(Any::Pf)),
+        "meanshift" => make_meanshift(MeanShiftConfig::default()).map(|t| t.map(Any::MeanShift)),
+        "kalman" => make_meanshift(MeanShiftConfig::kalman()).map(|t| t.map(Any::MeanShift)),
+        _ => fail!("tracker `{kind}` is not pf, meanshift or kalman"),
+    };
+    let mut tracker = match made {
         Ok(Some(t)) => t,
         Ok(None) => fail!("tracker taken"),
         Err(e) => fail!("{e}"),
@@ -92,7 +133,7 @@ fn run() -> bool {
     cp.SYST.clear_current();
     cp.SYST.enable_counter();
 
-    let _ = writeln!(out, "fixture {path} {width}x{height} {format:?} frames {count} seed {seed}");
+    let _ = writeln!(out, "fixture {path} {width}x{height} {format:?} frames {count} seed {seed} tracker {kind}");
     let mut stack_floor = paint_stack();
     let mut init_stack = None;
     let mut measured = 0usize;
@@ -156,7 +197,7 @@ fn run() -> bool {
     if let (Some(i), Some(p)) = (init_stack, peak) {
         let _ = writeln!(out, "peak stack: init {i} bytes, step {p} bytes");
     }
-    let _ = writeln!(out, "tracker RAM: {} bytes", core::mem::size_of::<FwTracker>());
+    let _ = writeln!(out, "tracker RAM: {} bytes", tracker.ram());
     let _ = writeln!(out, "ok");
     true
 }
@@ -168,6 +209,33 @@ fn run() -> bool {
 fn make_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
     let t = FwTracker::new(Config::default(), seed)?;
     Ok(cortex_m::singleton!(: FwTracker = t))
+}
+
+#[inline(never)]
+fn pf_init(t: &mut FwTracker, frame: &Frame<'_>, bbox: BoundingBox) -> Result<Estimate, pftrack::Error> {
+    t.init(frame, bbox)
+}
+
+#[inline(never)]
+fn pf_step(t: &mut FwTracker, frame: &Frame<'_>) -> Result<Estimate, pftrack::Error> {
+    t.step(frame)
+}
+
+#[inline(never)]
+fn ms_init(t: &mut MeanShift, frame: &Frame<'_>, bbox: BoundingBox) -> Result<Estimate, pftrack::Error> {
+    t.init(frame, bbox)
+}
+
+#[inline(never)]
+fn ms_step(t: &mut MeanShift, frame: &Frame<'_>) -> Result<Estimate, pftrack::Error> {
+    t.step(frame)
+}
+
+/// Builds a mean-shift tracker into a static (see `make_tracker`).
+#[inline(never)]
+fn make_meanshift(config: MeanShiftConfig) -> Result<Option<&'static mut MeanShift>, pftrack::Error> {
+    let t = MeanShift::new(config)?;
+    Ok(cortex_m::singleton!(: MeanShift = t))
 }
 
 unsafe extern "C" {

@@ -1,6 +1,6 @@
 //! Runs the core tracker over a sequence of frames and times it.
 
-use pftrack::{BoundingBox, Config, Estimate, Frame, Tracker};
+use pftrack::{BoundingBox, Config, Estimate, Frame, MeanShift, MeanShiftConfig, Tracker};
 use std::time::Instant;
 
 /// Particle count of the host harness (the papers' 100).
@@ -13,6 +13,29 @@ pub const EDGE_CELLS: usize = 16384;
 
 /// The tracker type the harness uses.
 pub type HostTracker = Tracker<PARTICLES, 512, EDGE_CELLS>;
+
+/// Which tracker runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum Method {
+    /// The colour particle filter ([`pftrack::Tracker`]), with the given [`Config`].
+    #[default]
+    Pf,
+    /// Mean shift ([`pftrack::MeanShift`], default configuration).
+    Meanshift,
+    /// Kalman-predicted mean shift ([`pftrack::MeanShiftConfig::kalman`]).
+    Kalman,
+}
+
+impl Method {
+    /// A short label for tables.
+    pub fn label(self) -> &'static str {
+        match self {
+            Method::Pf => "pftrack particle filter",
+            Method::Meanshift => "pftrack mean shift",
+            Method::Kalman => "pftrack Kalman mean shift",
+        }
+    }
+}
 
 /// What a run produced.
 #[derive(Debug, Clone)]
@@ -29,8 +52,55 @@ pub struct Run {
     pub particles: Vec<Vec<(f32, f32)>>,
 }
 
-/// Tracks `frames`, initialised on the first with `init`. `progress` is
-/// called after each frame with (done, total).
+/// Tracks `frames` with `method`, initialised on the first with `init`
+/// (`config` and `seed` apply to the particle filter). `progress` is called
+/// after each frame with (done, total).
+pub fn track_with<'a>(
+    method: Method,
+    config: Config,
+    seed: u64,
+    frames: &[Frame<'a>],
+    init: BoundingBox,
+    progress: impl FnMut(usize, usize),
+) -> Result<Run, pftrack::Error> {
+    match method {
+        Method::Pf => track(config, seed, frames, init, progress),
+        Method::Meanshift => track_meanshift(MeanShiftConfig::default(), frames, init, progress),
+        Method::Kalman => track_meanshift(MeanShiftConfig::kalman(), frames, init, progress),
+    }
+}
+
+/// Tracks `frames` with mean shift configured by `config`.
+pub fn track_meanshift<'a>(
+    config: MeanShiftConfig,
+    frames: &[Frame<'a>],
+    init: BoundingBox,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<Run, pftrack::Error> {
+    let mut tracker: Box<MeanShift> = Box::new(MeanShift::new(config)?);
+    let first = frames.first().ok_or(pftrack::Error::NotInitialised)?;
+    tracker.init(first, init)?;
+    let mut run = Run {
+        boxes: vec![init],
+        estimates: Vec::new(),
+        step_ms: Vec::new(),
+        threshold: config.min_similarity,
+        particles: Vec::new(),
+    };
+    for (i, f) in frames.iter().enumerate().skip(1) {
+        let t0 = Instant::now();
+        let est = tracker.step(f)?;
+        run.step_ms.push(t0.elapsed().as_secs_f64() * 1e3);
+        run.boxes.push(est.bbox());
+        run.estimates.push(est);
+        run.particles.push(Vec::new());
+        progress(i + 1, frames.len());
+    }
+    Ok(run)
+}
+
+/// Tracks `frames` with the particle filter, initialised on the first with
+/// `init`. `progress` is called after each frame with (done, total).
 pub fn track<'a>(
     config: Config,
     seed: u64,

@@ -4,9 +4,9 @@
 //! on nothing but the core and the fixture codecs, so it also builds for an
 //! ARMv6 Linux device (see the README).
 //!
-//! Usage: pftrack-trace FIXTURE [SEED]
+//! Usage: pftrack-trace FIXTURE [SEED [pf|meanshift|kalman]]
 
-use pftrack::{Config, Frame, Tracker};
+use pftrack::{Config, Frame, MeanShift, MeanShiftConfig, Tracker};
 use pftrack_fixture::{HEADER_LEN, Header, RECORD_META_LEN, RecordMeta};
 use std::io::Read;
 use std::process::ExitCode;
@@ -17,7 +17,7 @@ type FwTracker = Tracker<100>;
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some(path) = args.first() else {
-        eprintln!("usage: pftrack-trace FIXTURE [SEED]");
+        eprintln!("usage: pftrack-trace FIXTURE [SEED [pf|meanshift|kalman]]");
         return ExitCode::FAILURE;
     };
     let seed = match args.get(1).map(|s| s.parse::<u64>()) {
@@ -28,7 +28,8 @@ fn main() -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    match run(path, seed) {
+    let kind = args.get(2).map(String::as_str).unwrap_or("pf");
+    match run(path, seed, kind) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {path}: {e}");
@@ -38,12 +39,22 @@ fn main() -> ExitCode {
 }
 
 /// Streams the fixture record by record, as the firmware does.
-fn run(path: &str, seed: u64) -> Result<(), String> {
+fn run(path: &str, seed: u64, kind: &str) -> Result<(), String> {
     let mut file = std::fs::File::open(path).map_err(|e| e.to_string())?;
     let mut head = [0u8; HEADER_LEN];
     file.read_exact(&mut head).map_err(|_| "shorter than a fixture header".to_string())?;
     let h = Header::parse(&head).map_err(|e| e.to_string())?;
+    let ms_config = match kind {
+        "pf" => None,
+        "meanshift" => Some(MeanShiftConfig::default()),
+        "kalman" => Some(MeanShiftConfig::kalman()),
+        _ => return Err(format!("tracker `{kind}` is not pf, meanshift or kalman")),
+    };
     let mut tracker = Box::new(FwTracker::new(Config::default(), seed).map_err(|e| e.to_string())?);
+    let mut ms: Option<Box<MeanShift>> = match ms_config {
+        Some(c) => Some(Box::new(MeanShift::new(c).map_err(|e| e.to_string())?)),
+        None => None,
+    };
     let mut meta = [0u8; RECORD_META_LEN];
     let mut pixels = vec![0u8; h.frame_len()];
     for i in 0..h.frames {
@@ -52,7 +63,12 @@ fn run(path: &str, seed: u64) -> Result<(), String> {
         }
         let m = RecordMeta::parse(&meta, i).map_err(|e| e.to_string())?;
         let frame = Frame::new(&pixels, h.width, h.height, h.stride, h.format).map_err(|e| e.to_string())?;
-        let est = if i == 0 { tracker.init(&frame, m.truth) } else { tracker.step(&frame) };
+        let est = match (ms.as_mut(), i) {
+            (None, 0) => tracker.init(&frame, m.truth),
+            (None, _) => tracker.step(&frame),
+            (Some(t), 0) => t.init(&frame, m.truth),
+            (Some(t), _) => t.step(&frame),
+        };
         println!("{i} {}", est.map_err(|e| format!("frame {i}: {e}"))?.trace());
     }
     Ok(())

@@ -5,7 +5,7 @@ use clap::{Parser, Subcommand};
 use host_tests::fixture::Fixture;
 use host_tests::metrics::{has_target, median, score};
 use host_tests::otb;
-use host_tests::runner::{PARTICLES, Run, track};
+use host_tests::runner::{Method, PARTICLES, Run, track_with};
 use indicatif::{ProgressBar, ProgressStyle};
 use pftrack::{BoundingBox, Config, Event, Frame, PixelFormat};
 use std::path::{Path, PathBuf};
@@ -22,6 +22,9 @@ struct Cli {
 struct Common {
     #[arg(skip)]
     config: Config,
+    /// Which tracker runs (`--set`s configure the particle filter).
+    #[arg(long, value_enum, default_value_t = Method::Pf)]
+    tracker: Method,
     /// Where to write `<sequence>.txt` tracks (one x,y,w,h line per frame).
     #[arg(long, default_value = "out")]
     out_dir: PathBuf,
@@ -115,6 +118,10 @@ const VARIANTS: &[(&str, &[&str])] = &[
     ("resampling: multinomial", &["resampling=multinomial"]),
 ];
 
+/// Variants that swap the particle filter for another tracker.
+const OTHER_TRACKERS: &[(&str, Method)] =
+    &[("baseline: mean shift (±5% scale)", Method::Meanshift), ("baseline: Kalman mean shift", Method::Kalman)];
+
 /// A loaded sequence, in whatever format it came.
 struct Loaded {
     name: String,
@@ -188,7 +195,7 @@ struct Row {
 }
 
 /// Tracks one loaded sequence and scores it.
-fn evaluate(seq: &Loaded, config: Config, seed: u64) -> Result<(Row, Run), String> {
+fn evaluate(seq: &Loaded, method: Method, config: Config, seed: u64) -> Result<(Row, Run), String> {
     let frames: Vec<Frame<'_>> = seq
         .frames
         .iter()
@@ -204,7 +211,7 @@ fn evaluate(seq: &Loaded, config: Config, seed: u64) -> Result<(Row, Run), Strin
     }
     let pb = bar(frames.len(), "track");
     pb.set_prefix(seq.name.clone());
-    let run = track(config, seed, &frames, init, |i, _| pb.set_position(i as u64))
+    let run = track_with(method, config, seed, &frames, init, |i, _| pb.set_position(i as u64))
         .map_err(|e| format!("{}: {e}", seq.name))?;
     pb.finish_and_clear();
     let s = score(&run.boxes, &seq.truth).ok_or_else(|| format!("{}: no frame with a target to score", seq.name))?;
@@ -274,7 +281,7 @@ fn write_pictures(seq: &Loaded, run: &Run, dir: &Path) -> Result<(), String> {
 
 fn run_one(path: &Path, common: &Common) -> Result<Row, String> {
     let seq = load(path)?;
-    let (row, run) = evaluate(&seq, common.config, common.seed)?;
+    let (row, run) = evaluate(&seq, common.tracker, common.config, common.seed)?;
     if common.frames {
         print_frames(&seq, &run);
     }
@@ -298,23 +305,36 @@ fn ablate(paths: &[PathBuf], seeds: u64, only: Option<&str>, common: &Common) ->
     println!();
     println!("| variant | settings | mean AUC | mean P20 | ms/frame |");
     println!("|---|---|---|---|---|");
-    for (name, sets) in VARIANTS.iter().filter(|(n, _)| only.is_none_or(|o| n.contains(o))) {
+    let variants = VARIANTS
+        .iter()
+        .map(|&(name, sets)| (name, sets, Method::Pf))
+        .chain(OTHER_TRACKERS.iter().map(|&(name, m)| (name, &[][..], m)));
+    for (name, sets, method) in variants.filter(|(n, _, _)| only.is_none_or(|o| n.contains(o))) {
         let mut config = Config::default();
         for s in sets.iter().map(|s| s.to_string()).chain(common.set.iter().cloned()) {
             host_tests::settings::apply(&mut config, &s)?;
         }
         config.validate().map_err(|e| format!("variant `{name}`: {e}"))?;
         let (mut auc, mut p20, mut ms, mut n) = (0.0, 0.0, 0.0, 0.0);
-        for seed in 1..=seeds {
+        // The mean-shift trackers draw no random numbers: one seed says all.
+        let seeds_here = if method == Method::Pf { seeds } else { 1 };
+        for seed in 1..=seeds_here {
             for seq in &seqs {
-                let (row, _) = evaluate(seq, config, seed)?;
+                let (row, _) = evaluate(seq, method, config, seed)?;
                 auc += row.auc;
                 p20 += row.p20;
                 ms += row.ms;
                 n += 1.0;
             }
         }
-        let shown = if sets.is_empty() { "(defaults)".to_string() } else { sets.join(" ") };
+        let shown = match method {
+            Method::Pf if sets.is_empty() => "(defaults)".to_string(),
+            Method::Pf => sets.join(" "),
+            m => format!(
+                "--tracker {}",
+                clap::ValueEnum::to_possible_value(&m).map(|v| v.get_name().to_string()).unwrap_or_default()
+            ),
+        };
         println!("| {name} | `{shown}` | {:.3} | {:.3} | {:.3} |", auc / n, p20 / n, ms / n);
     }
     Ok(())
@@ -351,7 +371,10 @@ fn main() -> ExitCode {
         return ExitCode::FAILURE;
     }
     let settings = if common.set.is_empty() { "default config".to_string() } else { common.set.join(" ") };
-    println!("pftrack, {PARTICLES} particles, seed {}, {settings}", common.seed);
+    match common.tracker {
+        Method::Pf => println!("pftrack, {PARTICLES} particles, seed {}, {settings}", common.seed),
+        m => println!("{} (default configuration)", m.label()),
+    }
     println!(
         "{:<22} {:>6} {:>6} {:>6} {:>9} {:>5} {:>6}",
         "sequence", "frames", "AUC", "P20", "ms/frame", "lost", "found"
