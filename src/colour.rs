@@ -14,25 +14,53 @@ pub enum Binning {
     /// value, so less sensitive to lighting than RGB (the first paper's
     /// alternative). Greys (zero saturation) share the hue-0 bins.
     Hsv8x8x4,
+    /// RGB with 4 levels per channel: 64 bins (small enough for four
+    /// quadrant histograms in the default 512-bin capacity).
+    Rgb4x4x4,
+    /// RGB with `L` levels per channel (`L³` bins), `L` chosen per region
+    /// when the tracker learns its target by the Birgé–Rozenholc penalised
+    /// likelihood (the adaptive-bins paper), from every `L` from 2 up to
+    /// what the region's share of the histogram capacity holds.
+    Adaptive,
 }
 
+/// The smallest and largest levels per channel [`Binning::Adaptive`] tries.
+pub const ADAPTIVE_LEVELS: (u8, u8) = (2, 8);
+
 impl Binning {
-    /// Number of bins this binning uses.
+    /// Number of bins this binning uses; for [`Binning::Adaptive`], the
+    /// fewest it may choose (8).
     pub const fn bins(self) -> usize {
         match self {
             Binning::Rgb8x8x8 => 512,
             Binning::Hsv8x8x4 => 256,
+            Binning::Rgb4x4x4 => 64,
+            Binning::Adaptive => 8,
         }
     }
 
     /// The bin of an 8-bit RGB colour; always below [`Binning::bins`].
+    /// [`Binning::Adaptive`] bins at its coarsest here (2 levels); the
+    /// tracker uses [`levels_bin`] with the levels it chose.
     #[inline(always)]
     pub fn bin(self, rgb: [u8; 3]) -> usize {
         match self {
             Binning::Rgb8x8x8 => ((rgb[0] as usize >> 5) << 6) | ((rgb[1] as usize >> 5) << 3) | (rgb[2] as usize >> 5),
             Binning::Hsv8x8x4 => hsv_bin(rgb),
+            Binning::Rgb4x4x4 => ((rgb[0] as usize >> 6) << 4) | ((rgb[1] as usize >> 6) << 2) | (rgb[2] as usize >> 6),
+            Binning::Adaptive => levels_bin(rgb, 2),
         }
     }
+}
+
+/// The bin of an 8-bit RGB colour with `levels` equal-width levels per
+/// channel: `(r·L/256)·L² + (g·L/256)·L + b·L/256`, below `L³`. Integer
+/// multiplies and shifts only.
+#[inline(always)]
+pub fn levels_bin([r, g, b]: [u8; 3], levels: u8) -> usize {
+    let l = levels as usize;
+    let q = |c: u8| (c as usize * l) >> 8;
+    (q(r) * l + q(g)) * l + q(b)
 }
 
 /// A binning compiled into the histogram loop (a zero-sized type), so the
@@ -98,6 +126,26 @@ fn hsv_bin([r, g, b]: [u8; 3]) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn levels_bins_agree_with_the_fixed_rgb_binnings() {
+        // Reason: 8 and 4 equal levels are the top 3 and 2 bits, so
+        // `levels_bin` must reproduce Rgb8x8x8 and Rgb4x4x4 on every colour
+        // of a grid, and stay below L³ for every L.
+        for r in (0..=255).step_by(17) {
+            for g in (0..=255).step_by(5) {
+                for b in (0..=255).step_by(3) {
+                    let c = [r as u8, g as u8, b as u8];
+                    assert_eq!(levels_bin(c, 8), Binning::Rgb8x8x8.bin(c));
+                    assert_eq!(levels_bin(c, 4), Binning::Rgb4x4x4.bin(c));
+                    for l in 2..=8u8 {
+                        assert!(levels_bin(c, l) < (l as usize).pow(3));
+                    }
+                }
+            }
+        }
+        assert_eq!(levels_bin([255, 255, 255], 5), 124);
+    }
 
     #[test]
     fn rgb_binning_uses_top_three_bits() {

@@ -3,7 +3,8 @@
 use crate::colour::Binning;
 use crate::error::{ConfigError, ParamProblem};
 use crate::filter::{Dynamics, Resampling};
-use crate::likelihood::{Combination, Likelihood, Sigma};
+use crate::histogram::Similarity;
+use crate::likelihood::{Combination, Likelihood, Shape, Sigma};
 use crate::region::Sampling;
 use crate::scalar::Real;
 
@@ -24,6 +25,16 @@ use crate::scalar::Real;
 pub struct Config {
     /// Colour quantisation of the histograms.
     pub binning: Binning,
+    /// Split the ellipse into four quadrants, each with its own colour
+    /// histogram (adaptive-bins paper). The colour similarity is then the
+    /// median of the four, and an estimate reports a partial occlusion when
+    /// one quadrant fails the appearance test while the other three pass.
+    /// Each quadrant gets a quarter of the capacity `K`, so the binning must
+    /// fit in `K / 4` bins ([`Binning::Rgb4x4x4`] or [`Binning::Adaptive`] at
+    /// the default 512).
+    pub quadrants: bool,
+    /// How histograms are compared with the model.
+    pub similarity: Similarity,
     /// Which pixels of each region are read.
     pub sampling: Sampling,
     /// Most pixels read per region and cue; larger regions are read on a
@@ -43,6 +54,8 @@ pub struct Config {
     /// Model adaptation rate `α` in `[0, 1]`: `q ← (1 − α) q + α p_E[S]`.
     /// 0 keeps the initial model forever.
     pub alpha: Real,
+    /// When the model is updated.
+    pub model_update: ModelUpdate,
     /// The model is updated only when the mean state's likelihood
     /// `π_E[S] = exp(−d²/(2σ_u²))` exceeds this, in `[0, 1]`, so occluded
     /// frames do not pollute it (first paper), with `σ_u` = `update_sigma`.
@@ -79,6 +92,26 @@ pub struct Config {
     pub min_half_axis: Real,
 }
 
+/// When the target model adapts (it never does with `alpha` = 0). Either
+/// way, only on tracking frames where the target is seen.
+#[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ModelUpdate {
+    /// When the estimate is trustworthy: `exp(−d²/(2σ_u²))` above
+    /// `update_threshold`, with `σ_u` = `update_sigma` (first paper).
+    Confident,
+    /// Only when the model has become poor (adaptive-bins paper): `ρ₀` is
+    /// learnt as the mean confidence of the first `frames` tracking frames,
+    /// and the model is updated when the confidence falls below
+    /// `T = factor · ρ₀`: "why update the model when it is still good?"
+    WhenDegraded {
+        /// The factor `c` of `T = c · ρ₀`, in `[0, 1]`.
+        factor: Real,
+        /// Frames averaged into `ρ₀` (1 to 1000).
+        frames: u16,
+    },
+}
+
 /// Parameters of the edge-orientation cue.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -110,11 +143,17 @@ impl Default for Config {
     fn default() -> Self {
         Config {
             binning: Binning::Rgb8x8x8,
+            quadrants: false,
+            similarity: Similarity::Bhattacharyya,
             sampling: Sampling::Checkerboard,
             max_samples: 1000,
             edges: Some(EdgeCue { bins: 8, threshold: 100, flat_bin: false }),
             combination: Combination::Product,
-            likelihood: Likelihood { sigma: Sigma::Adaptive { min: 0.02, max: 0.5 }, eps: 0.005 },
+            likelihood: Likelihood {
+                sigma: Sigma::Adaptive { min: 0.02, max: 0.5 },
+                eps: 0.005,
+                shape: Shape::Gaussian,
+            },
             resampling: Resampling::Systematic,
             dynamics: Dynamics {
                 position_noise: 0.2,
@@ -124,6 +163,7 @@ impl Default for Config {
                 scale_rate_noise: 0.0,
             },
             alpha: 0.1,
+            model_update: ModelUpdate::Confident,
             update_threshold: 0.15,
             update_sigma: 0.3,
             appearance_sigmas: 2.0,
@@ -182,7 +222,19 @@ impl Config {
         check("dynamics.velocity_decay", d.velocity_decay, 0.0, 1.0)?;
         check("dynamics.scale_noise", d.scale_noise, 0.0, 0.5)?;
         check("dynamics.scale_rate_noise", d.scale_rate_noise, 0.0, 0.1)?;
+        if self.quadrants && !cfg!(feature = "quadrants") {
+            return Err(ConfigError { field: "quadrants", problem: ParamProblem::NotBuilt { feature: "quadrants" } });
+        }
+        if self.binning == Binning::Adaptive && !cfg!(feature = "adaptive-bins") {
+            return Err(ConfigError { field: "binning", problem: ParamProblem::NotBuilt { feature: "adaptive-bins" } });
+        }
         check("alpha", self.alpha, 0.0, 1.0)?;
+        if let ModelUpdate::WhenDegraded { factor, frames } = self.model_update {
+            check("model_update.factor", factor, 0.0, 1.0)?;
+            if frames == 0 || frames > 1000 {
+                return Err(ConfigError { field: "model_update.frames", problem: ParamProblem::OutOfRange });
+            }
+        }
         check("update_threshold", self.update_threshold, 0.0, 1.0)?;
         positive("update_sigma", self.update_sigma, 10.0)?;
         check("appearance_sigmas", self.appearance_sigmas, 0.0, 100.0)?;

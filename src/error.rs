@@ -45,6 +45,12 @@ pub enum ParamProblem {
     NonFinite,
     /// Outside its documented range.
     OutOfRange,
+    /// Asks for a technique this build of the crate leaves out: enable the
+    /// named Cargo feature.
+    NotBuilt {
+        /// The Cargo feature that builds it in.
+        feature: &'static str,
+    },
 }
 
 /// A rejected [`crate::Config`] field.
@@ -138,6 +144,9 @@ impl fmt::Display for ConfigError {
         match self.problem {
             ParamProblem::NonFinite => write!(f, "config field `{}` is NaN or infinite", self.field),
             ParamProblem::OutOfRange => write!(f, "config field `{}` is out of range", self.field),
+            ParamProblem::NotBuilt { feature } => {
+                write!(f, "config field `{}` needs pftrack's `{feature}` feature", self.field)
+            }
         }
     }
 }

@@ -115,7 +115,7 @@ pub type HeadError<P, T, L> = FollowerError<
 /// let est = Estimate {
 ///     ellipse: Ellipse { cx: 80.0, cy: 120.0, hx: 20.0, hy: 20.0 },
 ///     confidence: 0.9, state: TrackState::Tracking, event: None,
-///     appearing: 50, model_updated: true, sigma: 0.1,
+///     appearing: 50, model_updated: true, sigma: 0.1, occluded_quadrant: None,
 /// };
 /// head.update(&est, 320, 240)?;
 /// let (pan, tilt) = head.position();
@@ -231,6 +231,7 @@ mod tests {
             appearing: 50,
             model_updated: false,
             sigma: 0.1,
+            occluded_quadrant: None,
         }
     }
 

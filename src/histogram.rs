@@ -10,11 +10,37 @@
 //! are `u32` sums, and the Bhattacharyya coefficient is an integer dot product
 //! of square roots, turned into a [`Real`] once per comparison.
 
-use crate::colour::{Binning, Quantise, Rgb8x8x8};
+use crate::colour::{Binning, Quantise, Rgb8x8x8, levels_bin};
 use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
 use crate::geometry::Ellipse;
-use crate::region::{Lattice, Sampling, for_each_row};
+use crate::region::{Lattice, Sampling, floor, for_each_row};
 use crate::scalar::{Real, sqrt_q4};
+
+/// How the bins of a histogram are laid out: the colour binning, whether the
+/// ellipse is split into quadrants (each with its own block of bins), and
+/// the levels per channel each block uses under [`Binning::Adaptive`].
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub(crate) struct Layout {
+    pub binning: Binning,
+    /// 1 (the whole ellipse) or 4 (quadrants: top-left, top-right,
+    /// bottom-left, bottom-right, split at the centre pixel), each owning
+    /// `K / segments` consecutive bins.
+    pub segments: u8,
+    /// Levels per channel of each segment, for [`Binning::Adaptive`].
+    pub levels: [u8; 4],
+}
+
+impl Layout {
+    /// One histogram over the whole ellipse.
+    pub(crate) const fn whole(binning: Binning) -> Self {
+        Layout { binning, segments: 1, levels: [crate::colour::ADAPTIVE_LEVELS.0; 4] }
+    }
+
+    /// Whether this is the layout the per-format loops are compiled for.
+    fn is_fast(&self) -> bool {
+        self.segments == 1 && self.binning == Binning::Rgb8x8x8
+    }
+}
 
 /// A kernel-weighted histogram with capacity for `K` bins: raw integer
 /// counts plus their total (its normalisation is implicit, `p(u) = c(u) / total`).
@@ -85,7 +111,7 @@ impl<const K: usize> Histogram<K> {
 
     /// [`Histogram::compute`] on an explicit lattice.
     pub(crate) fn compute_on(&mut self, frame: &Frame<'_>, e: &Ellipse, binning: Binning, lattice: Lattice) {
-        self.compute_with(frame, e, binning, lattice, &mut ());
+        self.compute_with(frame, e, &Layout::whole(binning), lattice, &mut ());
     }
 
     /// [`Histogram::compute_on`], also feeding every sample to `sink`: other
@@ -95,38 +121,50 @@ impl<const K: usize> Histogram<K> {
         &mut self,
         frame: &Frame<'_>,
         e: &Ellipse,
-        binning: Binning,
+        layout: &Layout,
         lattice: Lattice,
         sink: &mut S,
     ) {
         self.clear();
-        // The default binning gets a loop compiled per pixel format; HSV,
-        // slower per pixel anyway, shares one loop that reads pixels through
-        // the general accessor. Two loops per binning would cost more flash
-        // than a small target can spare (measured: +6 KB on Cortex-M4).
-        match (binning, frame.format()) {
-            (Binning::Rgb8x8x8, PixelFormat::Rgb565) => self.accumulate::<Rgb565, Rgb8x8x8, S>(frame, e, lattice, sink),
-            (Binning::Rgb8x8x8, PixelFormat::Rgb888) => self.accumulate::<Rgb888, Rgb8x8x8, S>(frame, e, lattice, sink),
-            (Binning::Rgb8x8x8, PixelFormat::Yuv422) => self.accumulate::<Yuv422, Rgb8x8x8, S>(frame, e, lattice, sink),
-            (Binning::Rgb8x8x8, PixelFormat::Gray8) => self.accumulate::<Gray8, Rgb8x8x8, S>(frame, e, lattice, sink),
-            (Binning::Hsv8x8x4, _) => {
-                let (counts, mut total) = (&mut self.counts, 0u32);
-                for_each_row(frame, e, lattice, |span| {
-                    let y = span.y;
-                    sink.row(y);
-                    for (x, w) in span {
-                        sink.pixel(x, w);
-                        if let Some(rgb) = frame.rgb(x, y)
-                            && let Some(c) = counts.get_mut(binning.bin(rgb))
-                        {
-                            *c = c.wrapping_add(w);
-                            total = total.wrapping_add(w);
-                        }
-                    }
-                });
-                self.total = total;
+        // The default layout gets a loop compiled per pixel format; the
+        // others (HSV, coarser or adaptive RGB, quadrants), slower per pixel
+        // anyway, share one loop that reads pixels through the general
+        // accessor. A loop per layout and format would cost more flash than
+        // a small target can spare (measured: +6 KB on Cortex-M4 per loop).
+        if layout.is_fast() {
+            match frame.format() {
+                PixelFormat::Rgb565 => self.accumulate::<Rgb565, Rgb8x8x8, S>(frame, e, lattice, sink),
+                PixelFormat::Rgb888 => self.accumulate::<Rgb888, Rgb8x8x8, S>(frame, e, lattice, sink),
+                PixelFormat::Yuv422 => self.accumulate::<Yuv422, Rgb8x8x8, S>(frame, e, lattice, sink),
+                PixelFormat::Gray8 => self.accumulate::<Gray8, Rgb8x8x8, S>(frame, e, lattice, sink),
             }
+            return;
         }
+        let (counts, mut total) = (&mut self.counts, 0u32);
+        let quads = cfg!(feature = "quadrants") && layout.segments == 4;
+        let seg = K / layout.segments.max(1) as usize;
+        let (cx, cy) = (floor(e.cx), floor(e.cy));
+        let (binning, levels) = (layout.binning, layout.levels);
+        for_each_row(frame, e, lattice, |span| {
+            let y = span.y;
+            sink.row(y);
+            let top = if quads && y as i32 >= cy { 2 } else { 0 };
+            for (x, w) in span {
+                sink.pixel(x, w);
+                let q = top + (quads && x as i32 >= cx) as usize;
+                if let Some(rgb) = frame.rgb(x, y) {
+                    let b = match binning {
+                        Binning::Adaptive => levels_bin(rgb, levels.get(q).copied().unwrap_or(2)),
+                        other => other.bin(rgb),
+                    };
+                    if let Some(c) = counts.get_mut(q * seg + b) {
+                        *c = c.wrapping_add(w);
+                        total = total.wrapping_add(w);
+                    }
+                }
+            }
+        });
+        self.total = total;
     }
 
     #[inline(always)]
@@ -200,14 +238,30 @@ impl RowSink for () {
     fn pixel(&mut self, _: usize, _: u32) {}
 }
 
+/// How a histogram is compared with the model.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Similarity {
+    /// The Bhattacharyya coefficient `ρ = Σ sqrt(p(u) q(u))` (first paper).
+    #[default]
+    Bhattacharyya,
+    /// Histogram intersection `Σ min(p(u), q(u))` of the normalised
+    /// histograms (Swain and Ballard, the head-tracking paper's
+    /// `Σ min(I, M) / Σ I` with both normalised to the same mass).
+    Intersection,
+}
+
 /// The target model: a normalised histogram `q` and its square roots, kept
 /// ready for the Bhattacharyya sum.
 ///
 /// `q(u)` is stored in units of `2^-16` and `sqrt(q(u))` in units of `2^-12`.
+/// A model of a quadrant layout holds four blocks of `K / 4` bins, each
+/// normalised on its own.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Model<const K: usize> {
     q: [u16; K],
     sqrt_q: [u16; K],
+    segments: u8,
 }
 
 /// Fixed-point scale of a normalised model bin.
@@ -216,29 +270,66 @@ const Q_ONE: u64 = 1 << 16;
 impl<const K: usize> Model<K> {
     /// The model of a histogram, or `None` if the histogram is empty.
     pub fn from_histogram(h: &Histogram<K>) -> Option<Self> {
-        if h.total == 0 {
+        Self::from_segments(h, 1)
+    }
+
+    /// The model of a histogram laid out in `segments` equal blocks (1 or 4),
+    /// each normalised on its own; `None` if any block is empty.
+    pub(crate) fn from_segments(h: &Histogram<K>, segments: u8) -> Option<Self> {
+        // Checked before the model is built, so that it is built in place
+        // (an early return from the filling loop costs a 2·K-byte copy on
+        // the stack: measured, +2 KB of peak stack in `init`).
+        let segments = segments.max(1);
+        let len = Self::len_of(segments);
+        if h.counts.chunks(len).any(|c| segment_total(h, c, segments) == 0) {
             return None;
         }
-        let mut m = Model { q: [0; K], sqrt_q: [0; K] };
-        for (q, &c) in m.q.iter_mut().zip(h.counts.iter()) {
-            *q = normalised(c, h.total);
+        let mut m = Model { q: [0; K], sqrt_q: [0; K], segments };
+        for (q, c) in m.q.chunks_mut(len).zip(h.counts.chunks(len)) {
+            let total = segment_total(h, c, segments);
+            for (q, &c) in q.iter_mut().zip(c) {
+                *q = normalised(c, total);
+            }
         }
         m.refresh_roots();
         Some(m)
     }
 
+    /// Bins per segment (at least 1, so that chunking is well defined).
+    fn segment_len(&self) -> usize {
+        Self::len_of(self.segments)
+    }
+
+    fn len_of(segments: u8) -> usize {
+        // Without the feature a model has one segment, and saying so as a
+        // constant lets the compiler drop the per-segment code.
+        if !cfg!(feature = "quadrants") {
+            return K.max(1);
+        }
+        (K / segments.max(1) as usize).max(1)
+    }
+
     /// Blends a new observation into the model, `q ← (1 − α) q + α p`
     /// (the adaptive model of the first paper). `alpha` is clamped to `[0, 1]`;
-    /// an empty histogram leaves the model unchanged.
+    /// an empty histogram (or an empty segment of one) leaves the model (or
+    /// that segment) unchanged.
+    #[inline(never)]
     pub fn blend(&mut self, h: &Histogram<K>, alpha: Real) {
         if h.total == 0 || !(alpha > 0.0) {
             return;
         }
         let a = (alpha.min(1.0) * Q_ONE as Real) as u64;
-        for (q, &c) in self.q.iter_mut().zip(h.counts.iter()) {
-            let p = normalised(c, h.total) as u64;
-            let v = ((Q_ONE - a) * *q as u64 + a * p + (Q_ONE >> 1)) >> 16;
-            *q = v.min(u16::MAX as u64) as u16;
+        let len = self.segment_len();
+        for (q, c) in self.q.chunks_mut(len).zip(h.counts.chunks(len)) {
+            let total = segment_total(h, c, self.segments);
+            if total == 0 {
+                continue;
+            }
+            for (q, &c) in q.iter_mut().zip(c) {
+                let p = normalised(c, total) as u64;
+                let v = ((Q_ONE - a) * *q as u64 + a * p + (Q_ONE >> 1)) >> 16;
+                *q = v.min(u16::MAX as u64) as u16;
+            }
         }
         self.refresh_roots();
     }
@@ -250,14 +341,14 @@ impl<const K: usize> Model<K> {
         }
     }
 
-    /// `sqrt(q(u))` per bin, in units of `2^-12`.
-    pub(crate) fn sqrt_bins(&self) -> &[u16; K] {
-        &self.sqrt_q
-    }
-
     /// The normalised bins, in units of `2^-16`.
     pub fn bins(&self) -> &[u16; K] {
         &self.q
+    }
+
+    /// `sqrt(q(u))` per bin, in units of `2^-12`.
+    pub(crate) fn sqrt_bins(&self) -> &[u16; K] {
+        &self.sqrt_q
     }
 
     /// The Bhattacharyya coefficient `ρ = Σ sqrt(p(u) q(u))` between the
@@ -269,20 +360,74 @@ impl<const K: usize> Model<K> {
     /// bin and one division per comparison. The result is within 0.005 of
     /// the exact value (tested against an f64 implementation).
     pub fn bhattacharyya(&self, h: &Histogram<K>) -> Real {
-        if h.total == 0 {
-            return 0.0;
-        }
-        let mut sum = 0u64;
-        for (&c, &s) in h.counts.iter().zip(self.sqrt_q.iter()) {
-            if c != 0 && s != 0 {
-                // sqrt_q4(c) < 2^20 and s <= 2^12: the product fits in u32.
-                sum += (sqrt_q4(c) * s as u32) as u64;
-            }
-        }
-        // Σ 16·sqrt(c) · 4096·sqrt(q) / (16·sqrt(C) · 4096)
-        let denom = sqrt_q4(h.total) as Real * 4096.0;
-        if denom > 0.0 { crate::scalar::clamp(sum as Real / denom, 0.0, 1.0) } else { 0.0 }
+        bhattacharyya(&h.counts, &self.sqrt_q, h.total)
     }
+
+    /// The histogram intersection `Σ min(p(u), q(u))`, in `[0, 1]`: 1 for
+    /// identical distributions, 0 for disjoint ones and for an empty histogram.
+    pub fn intersection(&self, h: &Histogram<K>) -> Real {
+        intersection(&h.counts, &self.q, h.total)
+    }
+
+    /// How `h` compares with this model under `kind`. For a quadrant model,
+    /// the comparisons of the four quadrants.
+    #[inline(never)]
+    pub(crate) fn compare(&self, h: &Histogram<K>, kind: Similarity) -> [Real; 4] {
+        let mut out = [0.0; 4];
+        let len = self.segment_len();
+        let blocks = h.counts.chunks(len).zip(self.q.chunks(len)).zip(self.sqrt_q.chunks(len));
+        for (o, ((c, q), sq)) in out.iter_mut().zip(blocks) {
+            *o = compare_block(c, q, sq, segment_total(h, c, self.segments), kind);
+        }
+        out
+    }
+}
+
+/// The mass of one segment's counts `c` (the histogram's total when there is
+/// only one segment, saving a sum per comparison on the default path).
+fn segment_total<const K: usize>(h: &Histogram<K>, c: &[u32], segments: u8) -> u32 {
+    if !cfg!(feature = "quadrants") || segments <= 1 { h.total } else { c.iter().fold(0u32, |a, &v| a.wrapping_add(v)) }
+}
+
+/// One block's similarity. Out of line, so that the per-particle caller
+/// holds one copy of each sum rather than one per quadrant (measured: +3 KB
+/// of Cortex-M4 code when inlined).
+#[inline(never)]
+fn compare_block(c: &[u32], q: &[u16], sq: &[u16], total: u32, kind: Similarity) -> Real {
+    match kind {
+        Similarity::Bhattacharyya => bhattacharyya(c, sq, total),
+        Similarity::Intersection => intersection(c, q, total),
+    }
+}
+
+/// `Σ sqrt(c(u)/C) sqrt(q(u))` from counts, their total and the model's roots.
+fn bhattacharyya(counts: &[u32], sqrt_q: &[u16], total: u32) -> Real {
+    if total == 0 {
+        return 0.0;
+    }
+    let mut sum = 0u64;
+    for (&c, &s) in counts.iter().zip(sqrt_q.iter()) {
+        if c != 0 && s != 0 {
+            // sqrt_q4(c) < 2^20 and s <= 2^12: the product fits in u32.
+            sum += (sqrt_q4(c) * s as u32) as u64;
+        }
+    }
+    // Σ 16·sqrt(c) · 4096·sqrt(q) / (16·sqrt(C) · 4096)
+    let denom = sqrt_q4(total) as Real * 4096.0;
+    if denom > 0.0 { crate::scalar::clamp(sum as Real / denom, 0.0, 1.0) } else { 0.0 }
+}
+
+/// `Σ min(c(u)/C, q(u))`, exactly in integers: `Σ min(c·2^16, q·C) / (C·2^16)`.
+fn intersection(counts: &[u32], q: &[u16], total: u32) -> Real {
+    if total == 0 {
+        return 0.0;
+    }
+    let mut sum = 0u64;
+    for (&c, &q) in counts.iter().zip(q.iter()) {
+        // Each term is below 2^48; K of them stay far below 2^64.
+        sum += (c as u64 * Q_ONE).min(q as u64 * total as u64);
+    }
+    crate::scalar::clamp(sum as Real / (total as Real * Q_ONE as Real), 0.0, 1.0)
 }
 
 /// `c / total` in units of `2^-16`, saturated to `u16`.

@@ -43,6 +43,8 @@
 //! ```
 #![cfg_attr(not(test), no_std)]
 
+#[cfg(feature = "adaptive-bins")]
+pub mod bins;
 pub mod colour;
 pub mod config;
 pub mod edges;
@@ -59,15 +61,15 @@ pub mod scalar;
 pub mod tracker;
 
 pub use colour::Binning;
-pub use config::{Config, EdgeCue};
+pub use config::{Config, EdgeCue, ModelUpdate};
 pub use edges::{EdgeMap, EdgeParams};
 pub use error::{ConfigError, Error, FrameError, ParamProblem, RegionError};
 pub use filter::{Dynamics, Particle, Resampling};
 pub use frame::{Frame, PixelFormat};
 pub use geometry::{BoundingBox, Ellipse};
-pub use histogram::{Histogram, Model};
-pub use likelihood::{Combination, Likelihood, Sigma};
+pub use histogram::{Histogram, Model, Similarity};
+pub use likelihood::{Combination, Likelihood, Shape, Sigma};
 pub use meanshift::{MeanShift, MeanShiftConfig, Prediction};
 pub use region::Sampling;
 pub use scalar::Real;
-pub use tracker::{Estimate, Event, Trace, TrackState, Tracker};
+pub use tracker::{Estimate, Event, ScalePrior, Trace, TrackState, Tracker};

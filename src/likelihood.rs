@@ -25,6 +25,19 @@ pub enum Sigma {
     },
 }
 
+/// The form of the likelihood.
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Shape {
+    /// `exp(−d² / (2σ²))` (first paper).
+    #[default]
+    Gaussian,
+    /// `exp(−d / σ)`: the adaptive-bins paper's `λ · exp(−β d)` with
+    /// `β = 1/σ` (the constant `λ` cancels when weights are normalised).
+    /// Heavier-tailed: far particles keep more weight.
+    Exponential,
+}
+
 /// How the colour and edge distances combine into one.
 #[derive(Copy, Clone, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -68,20 +81,33 @@ pub struct Likelihood {
     pub sigma: Sigma,
     /// The floor ε added to every weight.
     pub eps: Real,
+    /// Gaussian or exponential in the distance.
+    pub shape: Shape,
 }
 
 impl Likelihood {
-    /// The σ to use this frame, given the smallest squared distance of any particle.
+    /// The σ to use this frame, given the smallest squared distance of any
+    /// particle: adaptive σ gives that particle `log L = −1` in either shape.
     pub fn sigma_for(&self, d2_min: Real) -> Real {
         match self.sigma {
             Sigma::Fixed(s) => s,
-            Sigma::Adaptive { min, max } => crate::scalar::clamp(crate::scalar::sqrt(0.5 * d2_min.max(0.0)), min, max),
+            Sigma::Adaptive { min, max } => {
+                let d2 = d2_min.max(0.0);
+                let s = match self.shape {
+                    Shape::Gaussian => crate::scalar::sqrt(0.5 * d2),
+                    Shape::Exponential => crate::scalar::sqrt(d2),
+                };
+                crate::scalar::clamp(s, min, max)
+            }
         }
     }
 
-    /// `exp(−d² / (2σ²)) + ε` for a squared distance `d2 = 1 − ρ`.
+    /// `exp(−d² / (2σ²)) + ε` (or `exp(−d / σ) + ε`) for a squared distance `d2 = 1 − ρ`.
     pub fn weight(&self, d2: Real, sigma: Real) -> Real {
-        gaussian(d2, sigma) + self.eps
+        match self.shape {
+            Shape::Gaussian => gaussian(d2, sigma) + self.eps,
+            Shape::Exponential => exp(-crate::scalar::sqrt(d2.max(0.0)) / sigma) + self.eps,
+        }
     }
 }
 
@@ -97,12 +123,16 @@ mod tests {
     #[test]
     fn adaptive_sigma_gives_best_particle_log_l_minus_one() {
         // Reason: σ² = d_min²/2 makes d_min²/(2σ²) exactly 1 (paper 3, eq. 24).
-        let l = Likelihood { sigma: Sigma::Adaptive { min: 0.01, max: 1.0 }, eps: 0.0 };
-        for d2 in [0.01f32, 0.05, 0.2, 0.6] {
-            let s = l.sigma_for(d2);
-            let w = l.weight(d2, s);
-            assert!((w.ln() + 1.0).abs() < 1e-3, "d2={d2}: log L = {}", w.ln());
+        // The exponential shape: σ = d_min makes d_min/σ = 1 as well.
+        for shape in [Shape::Gaussian, Shape::Exponential] {
+            let l = Likelihood { sigma: Sigma::Adaptive { min: 0.01, max: 1.0 }, eps: 0.0, shape };
+            for d2 in [0.01f32, 0.05, 0.2, 0.6] {
+                let s = l.sigma_for(d2);
+                let w = l.weight(d2, s);
+                assert!((w.ln() + 1.0).abs() < 1e-3, "{shape:?} d2={d2}: log L = {}", w.ln());
+            }
         }
+        let l = Likelihood { sigma: Sigma::Adaptive { min: 0.01, max: 1.0 }, eps: 0.0, shape: Shape::Gaussian };
         // Bounds hold at both ends.
         assert_eq!(l.sigma_for(0.0), 0.01);
         assert_eq!(l.sigma_for(4.0), 1.0);
@@ -125,11 +155,14 @@ mod tests {
     #[test]
     fn fixed_sigma_and_floor() {
         // Reason: hand values: d² = 0.08, σ = 0.2 gives exp(−1) = 0.3679.
-        let l = Likelihood { sigma: Sigma::Fixed(0.2), eps: 0.01 };
+        let l = Likelihood { sigma: Sigma::Fixed(0.2), eps: 0.01, shape: Shape::Gaussian };
         assert_eq!(l.sigma_for(0.5), 0.2);
         assert!((l.weight(0.08, 0.2) - (0.36788 + 0.01)).abs() < 1e-4);
         // A hopeless particle still has the floor.
         assert!((l.weight(1.0, 0.2) - 0.01).abs() < 1e-5);
         assert_eq!(gaussian(0.0, 0.2), 1.0);
+        // Exponential by hand: d² = 0.04, d = 0.2, σ = 0.2 gives exp(−1).
+        let e = Likelihood { shape: Shape::Exponential, ..l };
+        assert!((e.weight(0.04, 0.2) - (0.36788 + 0.01)).abs() < 1e-4);
     }
 }

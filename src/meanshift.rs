@@ -249,7 +249,9 @@ impl<const K: usize> MeanShift<K> {
     /// A tracker with `config`, after validating it.
     pub fn new(config: MeanShiftConfig) -> Result<Self, Error> {
         config.validate()?;
-        if config.binning.bins() > K {
+        // Adaptive binning chooses levels per target inside the particle
+        // filter's layout; mean shift uses one fixed binning.
+        if config.binning.bins() > K || config.binning == Binning::Adaptive {
             return Err(ConfigError { field: "binning", problem: ParamProblem::OutOfRange }.into());
         }
         Ok(MeanShift {
@@ -309,6 +311,7 @@ impl<const K: usize> MeanShift<K> {
             appearing: 1,
             model_updated: false,
             sigma: 0.0,
+            occluded_quadrant: None,
         })
     }
 
@@ -397,6 +400,7 @@ impl<const K: usize> MeanShift<K> {
             appearing: seen as u16,
             model_updated: false,
             sigma: 0.0,
+            occluded_quadrant: None,
         })
     }
 }

@@ -114,7 +114,8 @@ impl Raster {
     }
 }
 
-fn floor(v: Real) -> i32 {
+/// `⌊v⌋` for values the tracker keeps in range (the pixel containing `v`).
+pub(crate) fn floor(v: Real) -> i32 {
     let t = v as i32;
     if (t as Real) > v { t - 1 } else { t }
 }

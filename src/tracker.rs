@@ -1,13 +1,13 @@
 //! The tracker: a particle filter over colour histograms with an adaptive
 //! model and explicit searching / tracking / lost states.
 
-use crate::config::{Config, MAX_EDGE_BINS};
+use crate::config::{Config, MAX_EDGE_BINS, ModelUpdate};
 use crate::edges::{EdgeMap, EdgeParams, EdgeSink};
 use crate::error::{ConfigError, Error, ParamProblem, RegionError};
 use crate::filter::{Bounds, Particle, mean_state, resample};
 use crate::frame::Frame;
 use crate::geometry::{BoundingBox, Ellipse};
-use crate::histogram::{Histogram, Model};
+use crate::histogram::{Histogram, Layout, Model};
 use crate::likelihood::gaussian;
 use crate::region::Lattice;
 use crate::scalar::{Real, sqrt, unit_from_bits};
@@ -62,6 +62,10 @@ pub struct Estimate {
     pub model_updated: bool,
     /// The likelihood width σ used in this step.
     pub sigma: Real,
+    /// With [`Config::quadrants`]: the quadrant (0 top-left, 1 top-right,
+    /// 2 bottom-left, 3 bottom-right) that fails the appearance test while
+    /// the other three pass, i.e. a partial occlusion there. `None` otherwise.
+    pub occluded_quadrant: Option<u8>,
 }
 
 impl Estimate {
@@ -84,6 +88,7 @@ impl Estimate {
     ///     appearing: 42,
     ///     model_updated: true,
     ///     sigma: 0.25,
+    ///     occluded_quadrant: None,
     /// };
     /// // By hand: 10.5 is 0x41280000 in IEEE-754; the box's top is
     /// // 20 − 6.25 = 13.75, shown rounded to 13.8.
@@ -151,6 +156,9 @@ impl core::fmt::Display for Trace<'_> {
 /// The learnt appearance of the target.
 #[derive(Clone, Debug)]
 struct Models<const K: usize> {
+    /// How colour histograms are binned (chosen at initialisation for
+    /// adaptive binning).
+    layout: Layout,
     colour: Model<K>,
     /// `None` when the edge cue is off, or the target has no edge above the
     /// threshold (a flat target: its edge histogram says nothing).
@@ -174,6 +182,61 @@ struct Target<const K: usize> {
     threshold: Real,
     /// Half axes to give particles re-drawn while searching.
     half_axes: (Real, Real),
+    /// For [`ModelUpdate::WhenDegraded`]: the sum and count of the
+    /// confidences that make up `ρ₀`.
+    rho0: (Real, u16),
+}
+
+/// An external measurement of the target's size for one frame: the
+/// head-tracking paper's depth-derived minor axis (from a depth sensor, a
+/// range finder, or a known distance). Particles whose shorter half axis
+/// lies outside `half_minor ± tolerance` are rescaled, keeping their aspect
+/// ratio, to the nearest end of that range before they are weighed.
+#[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ScalePrior {
+    /// The expected shorter half axis, in pixels (1 to 2048).
+    pub half_minor: Real,
+    /// How far from it a particle may be, in pixels (0 to 2048; the paper
+    /// searched ±1 px).
+    pub tolerance: Real,
+}
+
+impl ScalePrior {
+    fn validate(&self) -> Result<(), ConfigError> {
+        let limit = (crate::frame::MAX_DIMENSION / 2) as Real;
+        for (field, v, lo) in [("prior.half_minor", self.half_minor, 1.0), ("prior.tolerance", self.tolerance, 0.0)] {
+            if !v.is_finite() {
+                return Err(ConfigError { field, problem: ParamProblem::NonFinite });
+            }
+            if !(v >= lo && v <= limit) {
+                return Err(ConfigError { field, problem: ParamProblem::OutOfRange });
+            }
+        }
+        Ok(())
+    }
+
+    /// Rescales `p` so that its shorter half axis is within the prior.
+    fn apply(&self, p: &mut Particle) {
+        let minor = p.hx.min(p.hy);
+        let want = crate::scalar::clamp(minor, self.half_minor - self.tolerance, self.half_minor + self.tolerance);
+        if minor > 0.0 && want != minor {
+            let f = want / minor;
+            p.hx *= f;
+            p.hy *= f;
+        }
+    }
+}
+
+/// How one region compares with the models.
+#[derive(Copy, Clone, Debug)]
+struct Seen {
+    /// Colour similarity (the median of the quadrants' with quadrants).
+    rho: Real,
+    /// Combined similarity of colour and edges.
+    sim: Real,
+    /// The quadrants' colour similarities (zeros without quadrants).
+    quads: [Real; 4],
 }
 
 /// Working memory for observing regions: the histograms of the last region
@@ -187,24 +250,29 @@ struct Scratch<const K: usize, const E: usize> {
 
 impl<const K: usize, const E: usize> Scratch<K, E> {
     /// Histograms of ellipse `e`, left in `self` (for a model update).
-    fn observe(&mut self, cfg: &Config, frame: &Frame<'_>, e: &Ellipse, edges: bool) {
+    fn observe(&mut self, cfg: &Config, frame: &Frame<'_>, e: &Ellipse, layout: &Layout, edges: bool) {
         let lattice = Lattice::new(cfg.sampling, cfg.max_samples, e.hx, e.hy);
         // One walk over the region feeds both cues. One sink type, switched
         // by a flag, keeps one compiled loop per pixel format instead of two
         // (flash is scarce on the targets).
         let Scratch { colour, edge, map } = self;
-        colour.compute_with(frame, e, cfg.binning, lattice, &mut EdgeSink::new(map, edge, edges));
+        colour.compute_with(frame, e, layout, lattice, &mut EdgeSink::new(map, edge, edges));
     }
 
-    /// How ellipse `e` compares with `models`: (colour ρ, combined similarity),
-    /// both in `[0, 1]`.
-    fn similarity(&mut self, cfg: &Config, frame: &Frame<'_>, models: &Models<K>, e: &Ellipse) -> (Real, Real) {
-        self.observe(cfg, frame, e, models.edge.is_some());
-        let rho = models.colour.bhattacharyya(&self.colour);
-        match &models.edge {
-            Some(m) => (rho, cfg.combination.similarity(rho, m.bhattacharyya(&self.edge))),
-            None => (rho, rho),
-        }
+    /// How ellipse `e` compares with `models`; all similarities in `[0, 1]`.
+    fn similarity(&mut self, cfg: &Config, frame: &Frame<'_>, models: &Models<K>, e: &Ellipse) -> Seen {
+        self.observe(cfg, frame, e, &models.layout, models.edge.is_some());
+        let per = models.colour.compare(&self.colour, cfg.similarity);
+        let (rho, quads) =
+            if cfg!(feature = "quadrants") && cfg.quadrants { (median4(per), per) } else { (per[0], [0.0; 4]) };
+        let sim = match &models.edge {
+            Some(m) => {
+                let [edge, ..] = m.compare(&self.edge, cfg.similarity);
+                cfg.combination.similarity(rho, edge)
+            }
+            None => rho,
+        };
+        Seen { rho, sim, quads }
     }
 
     /// Computes the edge map over the pixel rectangle `[x0, x1) × [y0, y1)`,
@@ -224,6 +292,24 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
                 EdgeParams { bins: e.bins as usize, threshold: e.threshold, min_spacing, flat_bin: e.flat_bin },
             );
         }
+    }
+}
+
+/// The median of four values: the mean of the middle two.
+fn median4(v: [Real; 4]) -> Real {
+    let [a, b, c, d] = v;
+    let (lo1, hi1) = if a <= b { (a, b) } else { (b, a) };
+    let (lo2, hi2) = if c <= d { (c, d) } else { (d, c) };
+    // The middle two are the larger of the lows and the smaller of the highs.
+    0.5 * (lo1.max(lo2) + hi1.min(hi2))
+}
+
+/// The quadrant that fails the appearance test while the other three pass.
+fn occluded(quads: [Real; 4], threshold: Real) -> Option<u8> {
+    let mut bad = quads.iter().enumerate().filter(|&(_, &q)| !(q > threshold));
+    match (bad.next(), bad.next()) {
+        (Some((i, _)), None) => Some(i as u8),
+        _ => None,
     }
 }
 
@@ -302,6 +388,9 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         if config.binning.bins() > K {
             return Err(ConfigError { field: "binning", problem: ParamProblem::OutOfRange }.into());
         }
+        if config.quadrants && 4 * config.binning.bins() > K {
+            return Err(ConfigError { field: "quadrants", problem: ParamProblem::OutOfRange }.into());
+        }
         Ok(Tracker {
             config,
             rng,
@@ -372,6 +461,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
             appearing: N as u16,
             model_updated: false,
             sigma: self.config.likelihood.sigma_for(0.0),
+            occluded_quadrant: None,
         })
     }
 
@@ -400,11 +490,19 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         let (fw, fh) = (frame.width(), frame.height());
         let e = Ellipse::from_box(bbox);
         let sc = &mut self.scratch;
+        let segments = if cfg!(feature = "quadrants") && cfg.quadrants { 4 } else { 1 };
+        #[cfg_attr(not(feature = "adaptive-bins"), allow(unused_mut))]
+        let mut layout = Layout { segments, ..Layout::whole(cfg.binning) };
+        #[cfg(feature = "adaptive-bins")]
+        if cfg.binning == crate::colour::Binning::Adaptive {
+            let lattice = Lattice::new(cfg.sampling, cfg.max_samples, e.hx, e.hy);
+            layout.levels = crate::bins::choose_levels(&mut sc.colour, frame, &e, lattice, segments);
+        }
         sc.map_edges(cfg, frame, cover(&e, fw, fh), (e.hx, e.hy));
-        sc.observe(cfg, frame, &e, cfg.edges.is_some());
-        let colour = Model::from_histogram(&sc.colour).ok_or(RegionError::NoPixels)?;
+        sc.observe(cfg, frame, &e, &layout, cfg.edges.is_some());
+        let colour = Model::from_segments(&sc.colour, segments).ok_or(RegionError::NoPixels)?;
         let edge = if cfg.edges.is_some() { Model::from_histogram(&sc.edge) } else { None };
-        let models = Models { colour, edge };
+        let models = Models { layout, colour, edge };
 
         // Background similarity on a grid of target-sized regions that do not
         // touch the target: at most 8x8 of them, spaced at least one target
@@ -425,7 +523,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
                     // ones can match the target's orientations well (measured
                     // on the exit-and-return scene), which would make an empty
                     // scene "contain" the target.
-                    let (sim, _) = sc.similarity(cfg, frame, &models, &Ellipse::from_box(&cand));
+                    let sim = sc.similarity(cfg, frame, &models, &Ellipse::from_box(&cand)).rho;
                     n += 1;
                     s1 += sim;
                     s2 += sim * sim;
@@ -448,6 +546,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
             frame: (frame.width(), frame.height()),
             threshold,
             half_axes: (e.hx.max(cfg.min_half_axis), e.hy.max(cfg.min_half_axis)),
+            rho0: (0.0, 0),
         })
     }
 
@@ -457,6 +556,19 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
     /// The frame must have the size the tracker was initialised with; any
     /// pixel format may be used.
     pub fn step(&mut self, frame: &Frame<'_>) -> Result<Estimate, Error> {
+        self.step_inner(frame, None)
+    }
+
+    /// [`Tracker::step`] with an external size measurement for this frame
+    /// (see [`ScalePrior`]). A NaN, infinite or out-of-range prior is an
+    /// [`Error::Config`] naming `prior.half_minor` or `prior.tolerance`, and
+    /// the tracker is left as it was.
+    pub fn step_with_prior(&mut self, frame: &Frame<'_>, prior: ScalePrior) -> Result<Estimate, Error> {
+        prior.validate()?;
+        self.step_inner(frame, Some(prior))
+    }
+
+    fn step_inner(&mut self, frame: &Frame<'_>, prior: Option<ScalePrior>) -> Result<Estimate, Error> {
         let Some(target) = self.target.as_mut() else {
             return Err(Error::NotInitialised);
         };
@@ -471,6 +583,9 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         resample(&mut self.particles, &mut self.weights, &mut self.copies, cfg.resampling, &mut self.rng);
         for p in self.particles.iter_mut() {
             cfg.dynamics.propagate(p, &bounds, &mut self.rng);
+            if let Some(prior) = &prior {
+                prior.apply(p);
+            }
         }
         if self.state != TrackState::Tracking {
             // Keep exploring: re-draw a fraction of the particles anywhere.
@@ -496,7 +611,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         let mut appearing = 0u16;
         let mut best: Real = 0.0;
         for (p, w) in self.particles.iter().zip(self.weights.iter_mut()) {
-            let (rho, sim) = self.scratch.similarity(cfg, frame, &target.models, &p.ellipse());
+            let Seen { rho, sim, .. } = self.scratch.similarity(cfg, frame, &target.models, &p.ellipse());
             if rho > target.threshold {
                 appearing += 1;
             }
@@ -521,7 +636,13 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         // 4. Estimate the mean state and look at it.
         let mean = mean_state(&self.particles, &self.weights);
         let ellipse = mean.ellipse();
-        let (_, confidence) = self.scratch.similarity(cfg, frame, &target.models, &ellipse);
+        let seen_mean = self.scratch.similarity(cfg, frame, &target.models, &ellipse);
+        let confidence = seen_mean.sim;
+        let occluded_quadrant = if cfg!(feature = "quadrants") && cfg.quadrants {
+            occluded(seen_mean.quads, target.threshold)
+        } else {
+            None
+        };
 
         // 5. The appearance test drives the state machine.
         let seen = appearing as Real > cfg.kickoff * N as Real;
@@ -547,12 +668,25 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         }
 
         // 6. Adapt the model, only on confident tracking frames.
-        let pi_e = gaussian(d2_max * (1.0 - confidence), cfg.update_sigma);
-        let model_updated = self.state == TrackState::Tracking
-            && event.is_none()
-            && self.misses == 0
-            && pi_e > cfg.update_threshold
-            && cfg.alpha > 0.0;
+        let steady = self.state == TrackState::Tracking && event.is_none() && self.misses == 0 && cfg.alpha > 0.0;
+        let wanted = match cfg.model_update {
+            ModelUpdate::Confident => gaussian(d2_max * (1.0 - confidence), cfg.update_sigma) > cfg.update_threshold,
+            ModelUpdate::WhenDegraded { factor, frames } => {
+                let (sum, n) = &mut target.rho0;
+                if *n < frames {
+                    // Still learning ρ₀ on the first tracking frames, where
+                    // the estimate is assumed good (as the paper does).
+                    if steady {
+                        *sum += confidence;
+                        *n += 1;
+                    }
+                    false
+                } else {
+                    confidence < factor * (*sum / *n as Real)
+                }
+            }
+        };
+        let model_updated = steady && wanted;
         if model_updated {
             // The scratch still holds the mean state's histograms.
             target.models.colour.blend(&self.scratch.colour, cfg.alpha);
@@ -564,7 +698,16 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
             target.half_axes = (ellipse.hx, ellipse.hy);
         }
 
-        Ok(Estimate { ellipse, confidence, state: self.state, event, appearing, model_updated, sigma })
+        Ok(Estimate {
+            ellipse,
+            confidence,
+            state: self.state,
+            event,
+            appearing,
+            model_updated,
+            sigma,
+            occluded_quadrant,
+        })
     }
 }
 

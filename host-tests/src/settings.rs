@@ -2,13 +2,17 @@
 //! and ablation runs. Every key names a [`pftrack::Config`] field; values are
 //! validated by the core afterwards, so this only parses.
 
-use pftrack::{Binning, Combination, Config, EdgeCue, Resampling, Sampling, Sigma};
+use pftrack::{Binning, Combination, Config, EdgeCue, ModelUpdate, Resampling, Sampling, Shape, Sigma, Similarity};
 
 /// The keys `apply` understands, with what they set.
 pub const KEYS: &[(&str, &str)] = &[
     ("sampling", "full | checkerboard | quarter"),
     ("resampling", "multinomial | systematic"),
-    ("binning", "rgb8x8x8 | hsv8x8x4"),
+    ("binning", "rgb8x8x8 | hsv8x8x4 | rgb4x4x4 | adaptive (Birgé–Rozenholc)"),
+    ("quadrants", "on | off (four quadrant histograms, median similarity)"),
+    ("similarity", "bhattacharyya | intersection"),
+    ("shape", "gaussian | exponential (likelihood exp(-d²/2σ²) or exp(-d/σ))"),
+    ("model_update", "confident | degraded:C:FRAMES (update when confidence < C·ρ₀)"),
     ("max_samples", "most pixels read per region and cue, 0 = all"),
     ("edges", "off | BINS:THRESHOLD[:flat], e.g. 8:100:flat (flat: weak pixels get a bin)"),
     ("combination", "product | weighted:W (W = colour weight)"),
@@ -59,7 +63,44 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
             c.binning = match v {
                 "rgb8x8x8" => Binning::Rgb8x8x8,
                 "hsv8x8x4" => Binning::Hsv8x8x4,
-                _ => return Err(format!("binning: `{v}` is not rgb8x8x8 or hsv8x8x4")),
+                "rgb4x4x4" => Binning::Rgb4x4x4,
+                "adaptive" => Binning::Adaptive,
+                _ => return Err(format!("binning: `{v}` is not rgb8x8x8, hsv8x8x4, rgb4x4x4 or adaptive")),
+            }
+        }
+        "quadrants" => {
+            c.quadrants = match v {
+                "on" => true,
+                "off" => false,
+                _ => return Err(format!("quadrants: `{v}` is not on or off")),
+            }
+        }
+        "similarity" => {
+            c.similarity = match v {
+                "bhattacharyya" => Similarity::Bhattacharyya,
+                "intersection" => Similarity::Intersection,
+                _ => return Err(format!("similarity: `{v}` is not bhattacharyya or intersection")),
+            }
+        }
+        "shape" => {
+            c.likelihood.shape = match v {
+                "gaussian" => Shape::Gaussian,
+                "exponential" => Shape::Exponential,
+                _ => return Err(format!("shape: `{v}` is not gaussian or exponential")),
+            }
+        }
+        "model_update" => {
+            c.model_update = if v == "confident" {
+                ModelUpdate::Confident
+            } else if let Some(rest) = v.strip_prefix("degraded:") {
+                let (f, n) =
+                    rest.split_once(':').ok_or_else(|| format!("model_update: `{v}` is not degraded:C:FRAMES"))?;
+                ModelUpdate::WhenDegraded {
+                    factor: num(key, f)?,
+                    frames: n.parse().map_err(|_| format!("model_update: `{n}` is not a frame count"))?,
+                }
+            } else {
+                return Err(format!("model_update: `{v}` is not confident or degraded:C:FRAMES"));
             }
         }
         "max_samples" => c.max_samples = v.parse().map_err(|_| format!("max_samples: `{v}` is not a whole number"))?,
@@ -131,6 +172,10 @@ mod tests {
                 "sampling" => "quarter",
                 "resampling" => "multinomial",
                 "binning" => "hsv8x8x4",
+                "quadrants" => "on",
+                "similarity" => "intersection",
+                "shape" => "exponential",
+                "model_update" => "degraded:0.9:5",
                 "max_samples" => "300",
                 "edges" => "4:60",
                 "combination" => "weighted:0.3",

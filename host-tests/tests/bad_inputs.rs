@@ -101,7 +101,14 @@ fn parameters() {
         (Config { kickoff: f32::INFINITY, ..Config::default() }, "kickoff", ParamProblem::NonFinite),
         (Config { min_half_axis: -3.0, ..Config::default() }, "min_half_axis", ParamProblem::OutOfRange),
         (
-            Config { likelihood: pftrack::Likelihood { sigma: Sigma::Fixed(f32::NAN), eps: 0.0 }, ..Config::default() },
+            Config {
+                likelihood: pftrack::Likelihood {
+                    sigma: Sigma::Fixed(f32::NAN),
+                    eps: 0.0,
+                    shape: pftrack::Shape::Gaussian,
+                },
+                ..Config::default()
+            },
             "likelihood.sigma",
             ParamProblem::NonFinite,
         ),

@@ -116,6 +116,13 @@ const VARIANTS: &[(&str, &[&str])] = &[
     ("model: update gate σ 0.2 (paper 1)", &["update_sigma=0.2"]),
     ("model: never updated", &["alpha=0"]),
     ("resampling: multinomial", &["resampling=multinomial"]),
+    ("colour: RGB 4x4x4", &["binning=rgb4x4x4"]),
+    ("colour: adaptive bins (Birgé–Rozenholc)", &["binning=adaptive"]),
+    ("spatial: quadrants, RGB 4x4x4", &["quadrants=on", "binning=rgb4x4x4"]),
+    ("spatial: quadrants, adaptive bins", &["quadrants=on", "binning=adaptive"]),
+    ("similarity: histogram intersection", &["similarity=intersection"]),
+    ("likelihood: exponential exp(-d/σ)", &["shape=exponential"]),
+    ("model: update only when degraded (T = 0.9 ρ₀, 10 frames)", &["model_update=degraded:0.9:10"]),
 ];
 
 /// Variants that swap the particle filter for another tracker.
