@@ -558,6 +558,83 @@ mod tests {
     }
 
     #[test]
+    fn intersection_identical_disjoint_reference_and_below_rho() {
+        let mut a = Histogram::<512>::new();
+        for (bin, w) in [(3usize, 1000u32), (40, 256), (41, 17), (500, 5000)] {
+            a.add(bin, w);
+        }
+        let m = Model::from_histogram(&a).unwrap();
+        // Reason: Σ min(p, p) = Σ p = 1; the model's 2^-16 rounding costs
+        // at most a few units.
+        let same = m.intersection(&a);
+        assert!(same > 0.999 && same <= 1.0, "{same}");
+        // Reason: no shared bin, so every minimum is zero.
+        let mut b = Histogram::<512>::new();
+        b.add(7, 10);
+        assert_eq!(m.intersection(&b), 0.0);
+        assert_eq!(m.intersection(&Histogram::new()), 0.0);
+        // Reason: cross-check with f64 on pseudo-random histograms, and the
+        // invariant min(p, q) <= sqrt(p q), so intersection <= ρ.
+        let mut seed = 99u64;
+        let mut next = || {
+            seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (seed >> 33) as u32
+        };
+        for trial in 0..50 {
+            let (mut p, mut q) = (Histogram::<512>::new(), Histogram::<512>::new());
+            for _ in 0..4 + trial * 10 {
+                let bin = next() as usize % 512;
+                p.add(bin, next() % 2000 + 1);
+                q.add(if next() % 3 == 0 { next() as usize % 512 } else { bin }, next() % 2000 + 1);
+            }
+            let model = Model::from_histogram(&q).unwrap();
+            let got = model.intersection(&p) as f64;
+            let (tp, tq) = (p.total() as f64, q.total() as f64);
+            let want: f64 =
+                p.counts().iter().zip(q.counts().iter()).map(|(&x, &y)| (x as f64 / tp).min(y as f64 / tq)).sum();
+            assert!((got - want).abs() < 0.005, "trial {trial}: {got} vs {want}");
+            assert!(got <= model.bhattacharyya(&p) as f64 + 0.005, "trial {trial}");
+        }
+    }
+
+    #[cfg(feature = "quadrants")]
+    #[test]
+    fn quadrant_blocks_are_normalised_and_compared_apart() {
+        // Reason: each quadrant block of a 4-segment model sums to 1 on its
+        // own, so a quadrant's similarity does not depend on how much mass
+        // the others hold: doubling one block's counts leaves all four
+        // comparisons unchanged, and emptying a block's match drops only it.
+        let mut h = Histogram::<512>::new();
+        for q in 0..4 {
+            h.add(q * 128 + 5, 100 * (q as u32 + 1));
+            h.add(q * 128 + 9, 50);
+        }
+        let m = Model::from_segments(&h, 4).unwrap();
+        for q in 0..4 {
+            let sum: u32 = m.bins()[q * 128..(q + 1) * 128].iter().map(|&v| v as u32).sum();
+            assert!((65530..=65536).contains(&sum), "block {q}: {sum}");
+        }
+        let base = m.compare(&h, Similarity::Bhattacharyya);
+        assert!(base.iter().all(|&r| r > 0.995), "{base:?}");
+        let mut heavier = h.clone();
+        heavier.add(5, 100);
+        heavier.add(9, 50);
+        assert_eq!(m.compare(&heavier, Similarity::Bhattacharyya)[1..], base[1..]);
+        let mut moved = Histogram::<512>::new();
+        for q in 0..4 {
+            let bin = if q == 2 { q * 128 + 77 } else { q * 128 + 5 };
+            moved.add(bin, 100);
+        }
+        let r = m.compare(&moved, Similarity::Bhattacharyya);
+        assert_eq!(r[2], 0.0);
+        assert!(r[0] > 0.5 && r[1] > 0.5 && r[3] > 0.5, "{r:?}");
+        // An empty block has no model.
+        let mut gap = Histogram::<512>::new();
+        gap.add(5, 1);
+        assert!(Model::from_segments(&gap, 4).is_none());
+    }
+
+    #[test]
     fn blend_moves_the_model_by_alpha() {
         // Reason: q' = (1 − α) q + α p bin by bin; with q all in bin 1 and p all
         // in bin 2, α = 0.25 gives 0.75 and 0.25. A bin holding all the mass

@@ -199,7 +199,17 @@ mod tests {
             assert!((got - want).abs() <= 1e-6 * want.abs().max(1.0), "ln({x}) = {got}, want {want}");
             x *= 1.0137;
         }
-        for x in [0.5f32, 0.999, 1.0, 1.001, core::f32::consts::SQRT_2 * 0.9999, core::f32::consts::SQRT_2 * 1.0001, 2.0, 3.0, 1e-40] {
+        for x in [
+            0.5f32,
+            0.999,
+            1.0,
+            1.001,
+            core::f32::consts::SQRT_2 * 0.9999,
+            core::f32::consts::SQRT_2 * 1.0001,
+            2.0,
+            3.0,
+            1e-40,
+        ] {
             let (got, want) = (ln(x) as f64, (x as f64).ln());
             assert!((got - want).abs() <= 1e-6 * want.abs().max(1.0), "ln({x}) = {got}, want {want}");
         }

@@ -95,7 +95,8 @@ fn tiny_and_huge_frames_track_without_trouble() {
 
 #[test]
 fn parameters() {
-    let cases: [(Config, &str, ParamProblem); 6] = [
+    use pftrack::{Binning, ModelUpdate};
+    let cases: [(Config, &str, ParamProblem); 10] = [
         (Config { alpha: f32::NAN, ..Config::default() }, "alpha", ParamProblem::NonFinite),
         (Config { alpha: 1e9, ..Config::default() }, "alpha", ParamProblem::OutOfRange),
         (Config { kickoff: f32::INFINITY, ..Config::default() }, "kickoff", ParamProblem::NonFinite),
@@ -113,6 +114,24 @@ fn parameters() {
             ParamProblem::NonFinite,
         ),
         (Config { lost_after: 0, ..Config::default() }, "lost_after", ParamProblem::OutOfRange),
+        (
+            Config { model_update: ModelUpdate::WhenDegraded { factor: f32::NAN, frames: 5 }, ..Config::default() },
+            "model_update.factor",
+            ParamProblem::NonFinite,
+        ),
+        (
+            Config { model_update: ModelUpdate::WhenDegraded { factor: 0.9, frames: 0 }, ..Config::default() },
+            "model_update.frames",
+            ParamProblem::OutOfRange,
+        ),
+        // 4 quadrant blocks of 512 RGB bins need 2048 bins; the harness's tracker has 512.
+        (Config { quadrants: true, ..Config::default() }, "quadrants", ParamProblem::OutOfRange),
+        // Nor do HSV's 256 bins fit a quarter of 512.
+        (
+            Config { quadrants: true, binning: Binning::Hsv8x8x4, ..Config::default() },
+            "quadrants",
+            ParamProblem::OutOfRange,
+        ),
     ];
     for (cfg, field, problem) in cases {
         let r = Tracker::<10>::new(cfg, 1).map(|_| ());
