@@ -861,7 +861,7 @@ mod tests {
                 assert!((9.0 - 1e-3..=11.0 + 1e-3).contains(&minor), "{p:?}");
             }
         }
-        let before = t.particles().clone();
+        let before = *t.particles();
         for (bad, field) in [
             (ScalePrior { half_minor: Real::NAN, tolerance: 1.0 }, "prior.half_minor"),
             (ScalePrior { half_minor: 0.5, tolerance: 1.0 }, "prior.half_minor"),
