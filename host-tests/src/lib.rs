@@ -7,6 +7,7 @@ pub mod fixture;
 pub mod metrics;
 pub mod otb;
 pub mod picture;
+pub mod plot;
 pub mod runner;
 pub mod scene;
 pub mod settings;

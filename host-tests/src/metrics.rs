@@ -52,6 +52,33 @@ pub fn score(predicted: &[BoundingBox], truth: &[BoundingBox]) -> Option<Scores>
     Some(Scores { auc, precision20, mean_iou, frames: pairs.len() })
 }
 
+/// The success curve: for each IoU threshold 0, 0.05, …, 1 the fraction of
+/// scored frames whose IoU is above it (its mean is [`Scores::auc`]).
+pub fn success_curve(predicted: &[BoundingBox], truth: &[BoundingBox]) -> Option<Vec<f64>> {
+    let ious: Vec<f64> =
+        predicted.iter().zip(truth).filter(|(_, t)| has_target(t)).map(|(p, t)| p.iou(t) as f64).collect();
+    if ious.is_empty() {
+        return None;
+    }
+    Some((0..SUCCESS_THRESHOLDS).map(|i| fraction_above(&ious, i as f64 * 0.05)).collect())
+}
+
+/// Centre-error thresholds of the precision curve: 0, 1, …, 50 px.
+pub const PRECISION_THRESHOLDS: usize = 51;
+
+/// The precision curve: for each threshold 0..=50 px the fraction of scored
+/// frames whose centre error is at most it (its value at 20 is
+/// [`Scores::precision20`]).
+pub fn precision_curve(predicted: &[BoundingBox], truth: &[BoundingBox]) -> Option<Vec<f64>> {
+    let errs: Vec<f64> =
+        predicted.iter().zip(truth).filter(|(_, t)| has_target(t)).map(|(p, t)| centre_error(p, t)).collect();
+    if errs.is_empty() {
+        return None;
+    }
+    let n = errs.len() as f64;
+    Some((0..PRECISION_THRESHOLDS).map(|t| errs.iter().filter(|&&e| e <= t as f64).count() as f64 / n).collect())
+}
+
 /// The median of a list (0 for an empty one).
 pub fn median(values: &[f64]) -> f64 {
     if values.is_empty() {
@@ -97,6 +124,22 @@ mod tests {
         let pred = vec![truth[0], BoundingBox::new(50.0, 50.0, 10.0, 10.0)];
         assert_eq!(score(&pred, &truth).unwrap().frames, 1);
         assert!(score(&pred[1..], &truth[1..]).is_none());
+    }
+
+    #[test]
+    fn curves_agree_with_the_scores() {
+        // Reason: by definition the success curve's mean is the AUC and the
+        // precision curve at 20 px is P20; both curves never increase /
+        // decrease respectively as the threshold grows.
+        let truth: Vec<_> = (0..40).map(|i| BoundingBox::new(i as f32, 10.0, 20.0, 30.0)).collect();
+        let pred: Vec<_> =
+            (0..40).map(|i| BoundingBox::new(i as f32 + (i % 7) as f32 * 4.0, 12.0, 18.0, 30.0)).collect();
+        let s = score(&pred, &truth).unwrap();
+        let sc = success_curve(&pred, &truth).unwrap();
+        let pc = precision_curve(&pred, &truth).unwrap();
+        assert!((sc.iter().sum::<f64>() / sc.len() as f64 - s.auc).abs() < 1e-12);
+        assert_eq!(pc[20], s.precision20);
+        assert!(sc.windows(2).all(|w| w[1] <= w[0]) && pc.windows(2).all(|w| w[1] >= w[0]));
     }
 
     #[test]

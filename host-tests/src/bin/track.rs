@@ -39,6 +39,10 @@ struct Common {
     /// state, as long as the confidence) and `<sequence>.png` (one frame of it).
     #[arg(long)]
     gif: bool,
+    /// Also write `success.png` and `precision.png` (OTB-style plots of this
+    /// run over all its sequences) into the output folder.
+    #[arg(long)]
+    plots: bool,
     /// Override a configuration field, e.g. `--set sampling=checkerboard --set eps=0.01`
     /// (repeatable; an unknown key lists the known ones).
     #[arg(long = "set", value_name = "KEY=VALUE")]
@@ -62,6 +66,21 @@ enum Command {
         files: Vec<PathBuf>,
         #[command(flatten)]
         common: Common,
+    },
+    /// Scores result sets against ground truth: each result folder holds
+    /// `<sequence>.txt` (x,y,w,h per frame, as `otb` writes) and optionally
+    /// `<sequence>.ms` (median ms/frame). Prints one table and draws the
+    /// success and precision plots of all sets.
+    Score {
+        /// OTB sequence folders (only groundtruth.txt is read).
+        #[arg(long, required = true, num_args = 1..)]
+        truth: Vec<PathBuf>,
+        /// Result folders, as NAME=FOLDER or FOLDER (named after the folder).
+        #[arg(long, required = true, num_args = 1..)]
+        results: Vec<String>,
+        /// Where to write success.png and precision.png.
+        #[arg(long, default_value = "out")]
+        plots: PathBuf,
     },
     /// Runs each configuration variant of the ablation study over the
     /// sequences for several seeds and prints one markdown table of mean
@@ -286,7 +305,7 @@ fn write_pictures(seq: &Loaded, run: &Run, dir: &Path) -> Result<(), String> {
     Ok(())
 }
 
-fn run_one(path: &Path, common: &Common) -> Result<Row, String> {
+fn run_one(path: &Path, common: &Common) -> Result<(Row, Vec<BoundingBox>, Vec<BoundingBox>), String> {
     let seq = load(path)?;
     let (row, run) = evaluate(&seq, common.tracker, common.config, common.seed)?;
     if common.frames {
@@ -299,7 +318,126 @@ fn run_one(path: &Path, common: &Common) -> Result<Row, String> {
     let text: String =
         run.boxes.iter().map(|b| format!("{:.2},{:.2},{:.2},{:.2}\n", b.x, b.y, b.width, b.height)).collect();
     std::fs::write(&out, text).map_err(|e| format!("{}: {e}", out.display()))?;
-    Ok(row)
+    let ms = common.out_dir.join(format!("{}.ms", seq.name));
+    std::fs::write(&ms, format!("{:.4}\n", row.ms)).map_err(|e| format!("{}: {e}", ms.display()))?;
+    Ok((row, run.boxes, seq.truth))
+}
+
+/// One result set's curves and mean scores over its sequences.
+struct SetScore {
+    name: String,
+    success: Vec<f64>,
+    precision: Vec<f64>,
+    auc: f64,
+    p20: f64,
+    ms: Option<f64>,
+}
+
+/// Scores the boxes of each sequence against its truth, averaging curves
+/// and scores over sequences (the tables' convention: mean of per-sequence AUC).
+fn score_set(name: &str, runs: &[(Vec<BoundingBox>, Vec<BoundingBox>)], ms: Option<f64>) -> Result<SetScore, String> {
+    use host_tests::metrics::{PRECISION_THRESHOLDS, SUCCESS_THRESHOLDS, precision_curve, success_curve};
+    let mut success = vec![0.0; SUCCESS_THRESHOLDS];
+    let mut precision = vec![0.0; PRECISION_THRESHOLDS];
+    let mut n = 0.0;
+    for (boxes, truth) in runs {
+        let (Some(s), Some(p)) = (success_curve(boxes, truth), precision_curve(boxes, truth)) else { continue };
+        success.iter_mut().zip(&s).for_each(|(a, b)| *a += b);
+        precision.iter_mut().zip(&p).for_each(|(a, b)| *a += b);
+        n += 1.0;
+    }
+    if n == 0.0 {
+        return Err(format!("{name}: no sequence could be scored"));
+    }
+    success.iter_mut().chain(precision.iter_mut()).for_each(|v| *v /= n);
+    let auc = success.iter().sum::<f64>() / success.len() as f64;
+    let p20 = precision.get(20).copied().unwrap_or(0.0);
+    Ok(SetScore { name: name.to_string(), success, precision, auc, p20, ms })
+}
+
+fn draw_plots(sets: &[SetScore], dir: &Path, what: &str) -> Result<(), String> {
+    use host_tests::plot::{Curve, line_plot};
+    let xs_s: Vec<f64> = (0..host_tests::metrics::SUCCESS_THRESHOLDS).map(|i| i as f64 * 0.05).collect();
+    let xs_p: Vec<f64> = (0..host_tests::metrics::PRECISION_THRESHOLDS).map(|i| i as f64).collect();
+    let s: Vec<Curve> =
+        sets.iter().map(|r| Curve { name: r.name.clone(), ys: r.success.clone(), score: r.auc }).collect();
+    let p: Vec<Curve> =
+        sets.iter().map(|r| Curve { name: r.name.clone(), ys: r.precision.clone(), score: r.p20 }).collect();
+    line_plot(
+        &dir.join("success.png"),
+        &format!("Success plots of OPE - {what}"),
+        "Overlap threshold",
+        "Success rate",
+        &xs_s,
+        &s,
+        "AUC",
+    )?;
+    line_plot(
+        &dir.join("precision.png"),
+        &format!("Precision plots of OPE - {what}"),
+        "Location error threshold (px)",
+        "Precision",
+        &xs_p,
+        &p,
+        "P20",
+    )?;
+    println!("plots written to {} and {}", dir.join("success.png").display(), dir.join("precision.png").display());
+    Ok(())
+}
+
+/// Reads a track file (x,y,w,h per line; commas, tabs or spaces).
+fn read_boxes(path: &Path) -> Result<Vec<BoundingBox>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    otb::parse_groundtruth(&text).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+fn score_command(truth: &[PathBuf], results: &[String], plots: &Path) -> Result<(), String> {
+    let truths: Vec<(String, Vec<BoundingBox>)> = truth
+        .iter()
+        .map(|dir| {
+            let name = dir.file_name().and_then(|n| n.to_str()).unwrap_or("").to_string();
+            read_boxes(&dir.join("groundtruth.txt")).map(|t| (name, t))
+        })
+        .collect::<Result<_, _>>()?;
+    let mut sets = Vec::new();
+    for spec in results {
+        let (name, folder) = match spec.split_once('=') {
+            Some((n, f)) => (n.to_string(), PathBuf::from(f)),
+            None => {
+                let f = PathBuf::from(spec);
+                (f.file_name().and_then(|n| n.to_str()).unwrap_or(spec).to_string(), f)
+            }
+        };
+        let mut runs = Vec::new();
+        let mut ms = Vec::new();
+        for (seq, t) in &truths {
+            let boxes = read_boxes(&folder.join(format!("{seq}.txt")))?;
+            if boxes.len() != t.len() {
+                return Err(format!("{name}: {seq} has {} boxes for {} frames", boxes.len(), t.len()));
+            }
+            if let Ok(v) = std::fs::read_to_string(folder.join(format!("{seq}.ms")))
+                && let Ok(v) = v.trim().parse::<f64>()
+            {
+                ms.push(v);
+            }
+            runs.push((boxes, t.clone()));
+        }
+        let ms = (ms.len() == truths.len()).then(|| ms.iter().sum::<f64>() / ms.len() as f64);
+        sets.push(score_set(&name, &runs, ms)?);
+    }
+    let seqs: Vec<&str> = truths.iter().map(|(n, _)| n.as_str()).collect();
+    println!("{} sequences: {}", seqs.len(), seqs.join(", "));
+    println!();
+    println!("| tracker | mean AUC | mean P20 | ms/frame |");
+    println!("|---|---|---|---|");
+    let mut order: Vec<&SetScore> = sets.iter().collect();
+    order.sort_by(|a, b| b.auc.total_cmp(&a.auc));
+    for r in order {
+        let ms = r.ms.map(|m| format!("{m:.3}")).unwrap_or_else(|| "-".to_string());
+        println!("| {} | {:.3} | {:.3} | {ms} |", r.name, r.auc, r.p20);
+    }
+    std::fs::create_dir_all(plots).map_err(|e| format!("{}: {e}", plots.display()))?;
+    draw_plots(&sets, plots, &format!("{} sequences", seqs.len()))
 }
 
 fn ablate(paths: &[PathBuf], seeds: u64, only: Option<&str>, common: &Common) -> Result<(), String> {
@@ -350,6 +488,15 @@ fn ablate(paths: &[PathBuf], seeds: u64, only: Option<&str>, common: &Common) ->
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let (paths, mut common, ablation) = match cli.command {
+        Command::Score { truth, results, plots } => {
+            return match score_command(&truth, &results, &plots) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
+            };
+        }
         Command::Otb { seqs, common } => (seqs, common, None),
         Command::Fixture { files, common } => (files, common, None),
         Command::Ablate { seqs, seeds, only, common } => (seqs, common, Some((seeds, only))),
@@ -387,10 +534,12 @@ fn main() -> ExitCode {
         "sequence", "frames", "AUC", "P20", "ms/frame", "lost", "found"
     );
     let mut rows = Vec::new();
+    let mut scored = Vec::new();
     let mut failed = false;
     for p in &paths {
         match run_one(p, &common) {
-            Ok(r) => {
+            Ok((r, boxes, truth)) => {
+                scored.push((boxes, truth));
                 println!(
                     "{:<22} {:>6} {:>6.3} {:>6.3} {:>9.3} {:>5} {:>6}",
                     r.name, r.frames, r.auc, r.p20, r.ms, r.lost, r.reacquired
@@ -415,5 +564,14 @@ fn main() -> ExitCode {
         );
     }
     println!("tracks written to {}", common.out_dir.display());
+    if common.plots && !scored.is_empty() {
+        let ms = (!rows.is_empty()).then(|| rows.iter().map(|r| r.ms).sum::<f64>() / rows.len() as f64);
+        let drawn = score_set(common.tracker.label(), &scored, ms)
+            .and_then(|set| draw_plots(&[set], &common.out_dir, &format!("{} sequences", scored.len())));
+        if let Err(e) = drawn {
+            eprintln!("error: {e}");
+            failed = true;
+        }
+    }
     if failed { ExitCode::FAILURE } else { ExitCode::SUCCESS }
 }

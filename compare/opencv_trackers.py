@@ -1,0 +1,139 @@
+#!/usr/bin/env python3
+"""Runs OpenCV's trackers on OTB sequences and writes their tracks in the
+format `track score` reads: <out>/<tracker>/<sequence>.txt (x,y,w,h per frame,
+the first being the initial box) and <sequence>.ms (median ms per update).
+
+Trackers: CSRT, KCF, MIL, MOSSE (opencv-contrib's legacy API), and the
+classic meanShift / CamShift on a hue back-projection (the OpenCV tutorial's
+recipe: hue histogram of the initial box, masked to saturated, not-too-dark
+pixels). A tracker that reports failure keeps its last box, so every frame
+has one, as OTB's one-pass evaluation expects.
+
+Usage: opencv_trackers.py --out DIR SEQ_DIR...
+"""
+import argparse
+import pathlib
+import statistics
+import sys
+import time
+
+import cv2
+import numpy as np
+
+
+def load_truth(seq):
+    rows = []
+    for line in (seq / "groundtruth.txt").read_text().splitlines():
+        line = line.strip()
+        if not line:
+            continue
+        parts = [p for p in line.replace("\t", ",").replace(" ", ",").split(",") if p]
+        rows.append(tuple(float(v) for v in parts[:4]))
+    return rows
+
+
+def frames(seq):
+    exts = {".jpg", ".jpeg", ".png", ".bmp"}
+    return sorted(p for p in (seq / "img").iterdir() if p.suffix.lower() in exts)
+
+
+class Legacy:
+    """An opencv-contrib tracker through the legacy API (the only one with MOSSE)."""
+
+    def __init__(self, name):
+        self.make = getattr(cv2.legacy, f"Tracker{name}_create")
+
+    def init(self, img, box):
+        self.failures = 0
+        self.t = self.make()
+        self.t.init(img, tuple(int(round(v)) for v in box))
+        self.box = box
+
+    def update(self, img):
+        ok, box = self.t.update(img)
+        if ok:
+            self.box = tuple(float(v) for v in box)
+        else:
+            self.failures += 1
+        return self.box
+
+
+class HueShift:
+    """meanShift or CamShift on the back-projection of the initial hue histogram."""
+
+    def __init__(self, cam):
+        self.cam = cam
+        self.crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 1)
+
+    def init(self, img, box):
+        x, y, w, h = (int(round(v)) for v in box)
+        hsv = cv2.cvtColor(img[y:y + h, x:x + w], cv2.COLOR_BGR2HSV)
+        mask = cv2.inRange(hsv, np.array((0.0, 60.0, 32.0)), np.array((180.0, 255.0, 255.0)))
+        self.hist = cv2.calcHist([hsv], [0], mask, [180], [0, 180])
+        cv2.normalize(self.hist, self.hist, 0, 255, cv2.NORM_MINMAX)
+        self.win = (x, y, max(w, 1), max(h, 1))
+        self.box = box
+
+    def update(self, img):
+        hsv = cv2.cvtColor(img, cv2.COLOR_BGR2HSV)
+        back = cv2.calcBackProject([hsv], [0], self.hist, [0, 180], 1)
+        if self.cam:
+            rot, win = cv2.CamShift(back, self.win, self.crit)
+            if win[2] > 0 and win[3] > 0:
+                self.win = win
+                x, y, w, h = cv2.boundingRect(cv2.boxPoints(rot).astype(np.float32))
+                self.box = (float(x), float(y), float(w), float(h))
+        else:
+            _, win = cv2.meanShift(back, self.win, self.crit)
+            self.win = win
+            self.box = tuple(float(v) for v in win)
+        return self.box
+
+
+TRACKERS = {
+    "CSRT": lambda: Legacy("CSRT"),
+    "KCF": lambda: Legacy("KCF"),
+    "MIL": lambda: Legacy("MIL"),
+    "MOSSE": lambda: Legacy("MOSSE"),
+    "meanShift": lambda: HueShift(cam=False),
+    "CamShift": lambda: HueShift(cam=True),
+}
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--out", required=True, type=pathlib.Path)
+    ap.add_argument("--only", help="comma-separated tracker names")
+    ap.add_argument("seqs", nargs="+", type=pathlib.Path)
+    args = ap.parse_args()
+    names = args.only.split(",") if args.only else list(TRACKERS)
+    cv2.setNumThreads(1)  # per-frame times comparable with the single-threaded core
+    for seq in args.seqs:
+        truth = load_truth(seq)
+        paths = frames(seq)
+        if len(paths) != len(truth):
+            sys.exit(f"{seq}: {len(paths)} images but {len(truth)} boxes")
+        images = [cv2.imread(str(p), cv2.IMREAD_COLOR) for p in paths]
+        for name in names:
+            tracker = TRACKERS[name]()
+            tracker.init(images[0], truth[0])
+            boxes, times = [truth[0]], []
+            for img in images[1:]:
+                t0 = time.perf_counter()
+                box = tracker.update(img)
+                times.append((time.perf_counter() - t0) * 1e3)
+                boxes.append(box)
+            out = args.out / f"opencv-{name}"
+            out.mkdir(parents=True, exist_ok=True)
+            (out / f"{seq.name}.txt").write_text("".join(f"{x:.2f},{y:.2f},{w:.2f},{h:.2f}\n" for x, y, w, h in boxes))
+            (out / f"{seq.name}.ms").write_text(f"{statistics.median(times):.4f}\n")
+            failed = getattr(tracker, "failures", 0)
+            print(
+                f"{seq.name:>10} {name:>9}: {statistics.median(times):8.3f} ms/frame, "
+                f"update reported failure on {failed} of {len(images) - 1} frames",
+                flush=True,
+            )
+
+
+if __name__ == "__main__":
+    main()
