@@ -153,6 +153,12 @@ impl<P: SetDutyCycle, T: SetDutyCycle, L: OutputPin> PanTilt<P, T, L> {
         self.position
     }
 
+    /// The peripherals, for reading back what was written (diagnostics,
+    /// tests, a display of the servo commands).
+    pub fn peripherals(&self) -> (&P, &T, &L) {
+        (&self.pan, &self.tilt, &self.led)
+    }
+
     /// Gives the peripherals back.
     pub fn release(self) -> (P, T, L) {
         (self.pan, self.tilt, self.led)
