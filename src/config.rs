@@ -43,6 +43,8 @@ pub struct Config {
     pub max_samples: u32,
     /// The edge-orientation cue, or `None` for colour only.
     pub edges: Option<EdgeCue>,
+    /// The ellipse-boundary gradient cue (head-tracking paper), or `None`.
+    pub boundary: Option<BoundaryCue>,
     /// How colour and edge distances combine (ignored for colour only).
     pub combination: Combination,
     /// From Bhattacharyya distance to weight.
@@ -112,6 +114,18 @@ pub enum ModelUpdate {
     },
 }
 
+/// The ellipse-boundary gradient cue: each particle's mean normal gradient
+/// along its outline ([`crate::boundary::outline_gradient`]) divided by the
+/// best particle's in the frame, mixed with the histogram similarity `s` as
+/// `(1 − weight) · s + weight · g`: the head-tracking paper's sum of
+/// normalised scores, weighted.
+#[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BoundaryCue {
+    /// Share of the boundary score, in `[0, 1]` (the paper's plain sum is 0.5).
+    pub weight: Real,
+}
+
 /// Parameters of the edge-orientation cue.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -148,6 +162,7 @@ impl Default for Config {
             sampling: Sampling::Checkerboard,
             max_samples: 1000,
             edges: Some(EdgeCue { bins: 8, threshold: 100, flat_bin: false }),
+            boundary: None,
             combination: Combination::Product,
             likelihood: Likelihood {
                 sigma: Sigma::Adaptive { min: 0.02, max: 0.5 },
@@ -215,6 +230,9 @@ impl Config {
             if e.threshold > 1500 {
                 return Err(ConfigError { field: "edges.threshold", problem: ParamProblem::OutOfRange });
             }
+        }
+        if let Some(b) = self.boundary {
+            check("boundary.weight", b.weight, 0.0, 1.0)?;
         }
         let d = &self.dynamics;
         check("dynamics.position_noise", d.position_noise, 0.0, 10.0)?;

@@ -45,6 +45,7 @@
 
 #[cfg(feature = "adaptive-bins")]
 pub mod bins;
+pub mod boundary;
 pub mod colour;
 pub mod config;
 pub mod edges;
@@ -61,7 +62,7 @@ pub mod scalar;
 pub mod tracker;
 
 pub use colour::Binning;
-pub use config::{Config, EdgeCue, ModelUpdate};
+pub use config::{BoundaryCue, Config, EdgeCue, ModelUpdate};
 pub use edges::{EdgeMap, EdgeParams};
 pub use error::{ConfigError, Error, FrameError, ParamProblem, RegionError};
 pub use filter::{Dynamics, Particle, Resampling};

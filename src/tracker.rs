@@ -295,6 +295,11 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
     }
 }
 
+/// The boundary score of `e`, in 1/16 Sobel units.
+fn boundary_q(frame: &Frame<'_>, e: &Ellipse) -> u16 {
+    (crate::boundary::outline_gradient(frame, e) * 16.0).min(u16::MAX as Real) as u16
+}
+
 /// The median of four values: the mean of the middle two.
 fn median4(v: [Real; 4]) -> Real {
     let [a, b, c, d] = v;
@@ -607,17 +612,33 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
             }
             self.scratch.map_edges(cfg, frame, (x0, y0, x1, y1), target.half_axes);
         }
-        // Similarity per particle, kept in `weights` until σ is known.
+        // Similarity per particle, kept in `weights` until σ is known. The
+        // boundary scores wait in `copies`, free until the next resampling
+        // (in 1/16 Sobel units; at most 1443 · 16 < 2^16), until the best
+        // one, their normaliser, is known: a second array would cost 2·N
+        // bytes of RAM for nothing.
         let mut appearing = 0u16;
-        let mut best: Real = 0.0;
-        for (p, w) in self.particles.iter().zip(self.weights.iter_mut()) {
-            let Seen { rho, sim, .. } = self.scratch.similarity(cfg, frame, &target.models, &p.ellipse());
+        let mut g_best = 0u16;
+        for ((p, w), g) in self.particles.iter().zip(self.weights.iter_mut()).zip(self.copies.iter_mut()) {
+            let e = p.ellipse();
+            let Seen { rho, sim, .. } = self.scratch.similarity(cfg, frame, &target.models, &e);
             if rho > target.threshold {
                 appearing += 1;
             }
-            best = best.max(sim);
             *w = sim;
+            if cfg.boundary.is_some() {
+                *g = boundary_q(frame, &e);
+                g_best = g_best.max(*g);
+            }
         }
+        if let Some(b) = cfg.boundary
+            && g_best > 0
+        {
+            for (w, &g) in self.weights.iter_mut().zip(self.copies.iter()) {
+                *w = (1.0 - b.weight) * *w + b.weight * (g as Real / g_best as Real);
+            }
+        }
+        let best = self.weights.iter().fold(0.0 as Real, |a, &w| a.max(w));
         let d2_max = target.models.d2_max(cfg);
         let sigma = cfg.likelihood.sigma_for(d2_max * (1.0 - best));
         let mut sum = 0.0;
@@ -637,7 +658,13 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
         let mean = mean_state(&self.particles, &self.weights);
         let ellipse = mean.ellipse();
         let seen_mean = self.scratch.similarity(cfg, frame, &target.models, &ellipse);
-        let confidence = seen_mean.sim;
+        let confidence = match cfg.boundary {
+            Some(b) if g_best > 0 => {
+                let g = (boundary_q(frame, &ellipse) as Real / g_best as Real).min(1.0);
+                (1.0 - b.weight) * seen_mean.sim + b.weight * g
+            }
+            _ => seen_mean.sim,
+        };
         let occluded_quadrant = if cfg!(feature = "quadrants") && cfg.quadrants {
             occluded(seen_mean.quads, target.threshold)
         } else {

@@ -16,6 +16,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ("max_samples", "most pixels read per region and cue, 0 = all"),
     ("edges", "off | BINS:THRESHOLD[:flat], e.g. 8:100:flat (flat: weak pixels get a bin)"),
     ("combination", "product | weighted:W (W = colour weight)"),
+    ("boundary", "off | W (ellipse-boundary gradient cue with share W)"),
     ("sigma", "fixed σ, e.g. 0.2"),
     ("adaptive_sigma", "MIN:MAX, e.g. 0.02:0.5 (σ chosen per frame)"),
     ("eps", "likelihood floor ε"),
@@ -132,6 +133,7 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
                 return Err(format!("combination: `{v}` is not product or weighted:W"));
             }
         }
+        "boundary" => c.boundary = if v == "off" { None } else { Some(pftrack::BoundaryCue { weight: num(key, v)? }) },
         "sigma" => c.likelihood.sigma = Sigma::Fixed(num(key, v)?),
         "adaptive_sigma" => {
             let (lo, hi) = v.split_once(':').ok_or_else(|| format!("adaptive_sigma: `{v}` is not MIN:MAX"))?;

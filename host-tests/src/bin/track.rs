@@ -140,6 +140,9 @@ const VARIANTS: &[(&str, &[&str])] = &[
     ("spatial: quadrants, RGB 4x4x4", &["quadrants=on", "binning=rgb4x4x4"]),
     ("spatial: quadrants, adaptive bins", &["quadrants=on", "binning=adaptive"]),
     ("similarity: histogram intersection", &["similarity=intersection"]),
+    ("cues: + ellipse-boundary gradient, share 0.1", &["boundary=0.1"]),
+    ("cues: + ellipse-boundary gradient, share 0.3", &["boundary=0.3"]),
+    ("cues: + ellipse-boundary gradient, share 0.5 (paper's sum)", &["boundary=0.5"]),
     ("likelihood: exponential exp(-d/σ)", &["shape=exponential"]),
     ("model: update only when degraded (T = 0.9 ρ₀, 10 frames)", &["model_update=degraded:0.9:10"]),
 ];
