@@ -232,6 +232,9 @@ impl Config {
             }
         }
         if let Some(b) = self.boundary {
+            if !cfg!(feature = "boundary") {
+                return Err(ConfigError { field: "boundary", problem: ParamProblem::NotBuilt { feature: "boundary" } });
+            }
             check("boundary.weight", b.weight, 0.0, 1.0)?;
         }
         let d = &self.dynamics;

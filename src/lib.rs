@@ -45,6 +45,7 @@
 
 #[cfg(feature = "adaptive-bins")]
 pub mod bins;
+#[cfg(feature = "boundary")]
 pub mod boundary;
 pub mod colour;
 pub mod config;

@@ -295,9 +295,15 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
     }
 }
 
-/// The boundary score of `e`, in 1/16 Sobel units.
+/// The boundary score of `e`, in 1/16 Sobel units (0 when the cue is not built).
 fn boundary_q(frame: &Frame<'_>, e: &Ellipse) -> u16 {
-    (crate::boundary::outline_gradient(frame, e) * 16.0).min(u16::MAX as Real) as u16
+    #[cfg(feature = "boundary")]
+    return (crate::boundary::outline_gradient(frame, e) * 16.0).min(u16::MAX as Real) as u16;
+    #[cfg(not(feature = "boundary"))]
+    {
+        let _ = (frame, e);
+        0
+    }
 }
 
 /// The median of four values: the mean of the middle two.
@@ -626,7 +632,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng> Tracker<N, K, E, R>
                 appearing += 1;
             }
             *w = sim;
-            if cfg.boundary.is_some() {
+            if cfg!(feature = "boundary") && cfg.boundary.is_some() {
                 *g = boundary_q(frame, &e);
                 g_best = g_best.max(*g);
             }
