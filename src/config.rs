@@ -43,6 +43,10 @@ pub struct Config {
     pub max_samples: u32,
     /// The edge-orientation cue, or `None` for colour only.
     pub edges: Option<EdgeCue>,
+    /// The likelihood-table mode for a target of fixed size (head-tracking
+    /// paper), or `None` for per-particle histograms. Needs a tracker with a
+    /// table capacity `T > 0`; particles then keep the initial size.
+    pub table: Option<TableMode>,
     /// The ellipse-boundary gradient cue (head-tracking paper), or `None`.
     pub boundary: Option<BoundaryCue>,
     /// How colour and edge distances combine (ignored for colour only).
@@ -114,6 +118,18 @@ pub enum ModelUpdate {
     },
 }
 
+/// The likelihood-table mode: each frame, the similarity of every position
+/// on a grid over the particles' area is computed by one sliding window
+/// (see [`crate::Tracker`]'s `T` and the `table` module), and particles look
+/// theirs up at the nearest grid point.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TableMode {
+    /// Grid spacing in pixels (1 to 16); coarser if the area needs more than
+    /// `T` cells.
+    pub spacing: u8,
+}
+
 /// The ellipse-boundary gradient cue: each particle's mean normal gradient
 /// along its outline ([`crate::boundary::outline_gradient`]) divided by the
 /// best particle's in the frame, mixed with the histogram similarity `s` as
@@ -162,6 +178,7 @@ impl Default for Config {
             sampling: Sampling::Checkerboard,
             max_samples: 1000,
             edges: Some(EdgeCue { bins: 8, threshold: 100, flat_bin: false }),
+            table: None,
             boundary: None,
             combination: Combination::Product,
             likelihood: Likelihood {
@@ -229,6 +246,16 @@ impl Config {
             }
             if e.threshold > 1500 {
                 return Err(ConfigError { field: "edges.threshold", problem: ParamProblem::OutOfRange });
+            }
+        }
+        if let Some(t) = self.table {
+            if !(1..=16).contains(&t.spacing) {
+                return Err(ConfigError { field: "table.spacing", problem: ParamProblem::OutOfRange });
+            }
+            // The window's histogram is whole-ellipse, and only the
+            // Bhattacharyya sum can be kept up to date pixel by pixel.
+            if self.quadrants || self.similarity != crate::histogram::Similarity::Bhattacharyya {
+                return Err(ConfigError { field: "table", problem: ParamProblem::OutOfRange });
             }
         }
         if let Some(b) = self.boundary {

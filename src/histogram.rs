@@ -89,6 +89,16 @@ impl<const K: usize> Histogram<K> {
         }
     }
 
+    /// Removes `weight` from bin `bin` (undoing [`Histogram::add`]); bins past
+    /// `K` are ignored.
+    #[inline(always)]
+    pub(crate) fn sub(&mut self, bin: usize, weight: u32) {
+        if let Some(c) = self.counts.get_mut(bin) {
+            *c = c.wrapping_sub(weight);
+            self.total = self.total.wrapping_sub(weight);
+        }
+    }
+
     /// Replaces the contents with the colour histogram of ellipse `e` in `frame`.
     ///
     /// Bins that `binning` produces at or past `K` are dropped; the tracker's

@@ -60,10 +60,11 @@ pub mod likelihood;
 pub mod meanshift;
 pub mod region;
 pub mod scalar;
+pub(crate) mod table;
 pub mod tracker;
 
 pub use colour::Binning;
-pub use config::{BoundaryCue, Config, EdgeCue, ModelUpdate};
+pub use config::{BoundaryCue, Config, EdgeCue, ModelUpdate, TableMode};
 pub use edges::{EdgeMap, EdgeParams};
 pub use error::{ConfigError, Error, FrameError, ParamProblem, RegionError};
 pub use filter::{Dynamics, Particle, Resampling};

@@ -73,6 +73,66 @@ impl Lattice {
     pub(crate) fn step(&self) -> usize {
         self.step as usize
     }
+
+    /// Whether pixel `(x, y)` is on the lattice: the same pixels
+    /// [`for_each_row`] visits (rows at multiples of the step; on a
+    /// checkerboard, odd cell rows shifted by one cell).
+    pub(crate) fn contains(&self, x: usize, y: usize) -> bool {
+        let s = self.step.max(1) as usize;
+        if !y.is_multiple_of(s) {
+            return false;
+        }
+        if self.checker {
+            let phase = ((y / s) % 2) * s;
+            x >= phase && (x - phase).is_multiple_of(2 * s)
+        } else {
+            x.is_multiple_of(s)
+        }
+    }
+}
+
+/// The rows of an ellipse as the region walk sees them: for each row offset
+/// `dy` from the centre pixel, the half width `d` of the pixels it visits
+/// (`|dx| <= d`), the pixels whose kernel weight is non-zero. The same for
+/// every position of an ellipse of given half axes, which is what lets a
+/// window slide.
+pub(crate) struct Extents {
+    ax: u32,
+    ay: u32,
+    ry: i32,
+}
+
+impl Extents {
+    /// The extents of ellipses with the half axes of `e` (its centre is not used).
+    pub(crate) fn new(e: &Ellipse) -> Option<Self> {
+        let r = Raster::new(&Ellipse { cx: 0.0, cy: 0.0, ..*e })?;
+        Some(Extents { ax: r.ax, ay: r.ay, ry: r.ry })
+    }
+
+    /// Largest row offset.
+    pub(crate) fn ry(&self) -> i32 {
+        self.ry
+    }
+
+    /// The half width of row `dy`, or `None` if that row has no pixel.
+    pub(crate) fn half_width(&self, dy: i32) -> Option<i32> {
+        let one = 1u64 << RADIUS2_SHIFT;
+        // A pixel counts when its weight (one − r²) >> 16 is non-zero.
+        let min_gap = 1u64 << (RADIUS2_SHIFT - KERNEL_ONE.trailing_zeros());
+        let dy = dy.unsigned_abs() as u64;
+        let ry2 = dy * dy * self.ay as u64;
+        let room = one.checked_sub(ry2)?.checked_sub(min_gap)?;
+        // Largest d with d²·ax <= room.
+        let ax = self.ax.max(1) as u64;
+        let mut d = (room / ax).isqrt();
+        while d > 0 && d * d * ax > room {
+            d -= 1;
+        }
+        while (d + 1) * (d + 1) * ax <= room {
+            d += 1;
+        }
+        Some(d as i32)
+    }
 }
 
 /// The integer form of one ellipse, ready for rasterising.

@@ -11,8 +11,12 @@ pub const PARTICLES: usize = 100;
 /// coarser map on large targets; see `pftrack::EdgeMap`).
 pub const EDGE_CELLS: usize = 16384;
 
+/// Likelihood-table cells of the harness's tracker (table mode): a 128x128
+/// grid of candidate positions at the finest spacing.
+pub const TABLE_CELLS: usize = 16384;
+
 /// The tracker type the harness uses.
-pub type HostTracker = Tracker<PARTICLES, 512, EDGE_CELLS>;
+pub type HostTracker = Tracker<PARTICLES, 512, EDGE_CELLS, rand_xoshiro::Xoshiro128PlusPlus, TABLE_CELLS>;
 
 /// Which tracker runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]

@@ -17,6 +17,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ("edges", "off | BINS:THRESHOLD[:flat], e.g. 8:100:flat (flat: weak pixels get a bin)"),
     ("combination", "product | weighted:W (W = colour weight)"),
     ("boundary", "off | W (ellipse-boundary gradient cue with share W)"),
+    ("table", "off | SPACING (likelihood-table mode, grid spacing in px)"),
     ("sigma", "fixed σ, e.g. 0.2"),
     ("adaptive_sigma", "MIN:MAX, e.g. 0.02:0.5 (σ chosen per frame)"),
     ("eps", "likelihood floor ε"),
@@ -133,6 +134,15 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
                 return Err(format!("combination: `{v}` is not product or weighted:W"));
             }
         }
+        "table" => {
+            c.table = if v == "off" {
+                None
+            } else {
+                Some(pftrack::TableMode {
+                    spacing: v.parse().map_err(|_| format!("table: `{v}` is not off or a spacing"))?,
+                })
+            }
+        }
         "boundary" => c.boundary = if v == "off" { None } else { Some(pftrack::BoundaryCue { weight: num(key, v)? }) },
         "sigma" => c.likelihood.sigma = Sigma::Fixed(num(key, v)?),
         "adaptive_sigma" => {
@@ -178,6 +188,7 @@ mod tests {
                 "similarity" => "intersection",
                 "shape" => "exponential",
                 "model_update" => "degraded:0.9:5",
+                "table" => "2",
                 "max_samples" => "300",
                 "edges" => "4:60",
                 "combination" => "weighted:0.3",
