@@ -459,6 +459,13 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         self.target.as_ref().and_then(|t| t.models.edge.as_ref())
     }
 
+    /// Levels per colour channel of each histogram block (one per quadrant,
+    /// or the first for the whole ellipse), as chosen at initialisation for
+    /// [`crate::Binning::Adaptive`]; `None` before initialisation.
+    pub fn colour_levels(&self) -> Option<[u8; 4]> {
+        self.target.as_ref().map(|t| t.models.layout.levels)
+    }
+
     /// The appearance threshold learnt from the background, once initialised.
     pub fn appearance_threshold(&self) -> Option<Real> {
         self.target.as_ref().map(|t| t.threshold)
