@@ -460,8 +460,10 @@ impl<const K: usize> Scratch<K> {
                 0
             } else {
                 // s < 2^13 and root_total < 2^21: the product fits; the
-                // quotient is at most 2^12 · sqrt(C) < 2^32.
-                ((s as u64 * root_total) / sqrt_q4(c) as u64).min(u32::MAX as u64) as u32
+                // quotient is at most 2^12 · sqrt(C) < 2^32. c != 0 makes its
+                // root at least 16; `max(1)` tells the compiler, so the
+                // division has no panic path (panic_check found one).
+                ((s as u64 * root_total) / (sqrt_q4(c) as u64).max(1)).min(u32::MAX as u64) as u32
             };
         }
         // Sums relative to the centre pixel keep the products small.

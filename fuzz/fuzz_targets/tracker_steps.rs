@@ -1,12 +1,31 @@
-//! A tracker fed arbitrary frames, an arbitrary box and a few steps. On every
-//! input: no panic; every estimate finite and inside the frame; confidence in
-//! [0, 1]; weights normalised.
+//! A tracker fed arbitrary frames, an arbitrary box and a few steps, under
+//! one of several configurations (the defaults and each optional technique,
+//! or a mean-shift baseline). On every input: no panic; every estimate finite
+//! and inside the frame; confidence in [0, 1]; weights normalised.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
-use pftrack::{BoundingBox, Config, Frame, PixelFormat, Tracker};
+use pftrack::{
+    Binning, BoundaryCue, BoundingBox, Config, Frame, MeanShift, MeanShiftConfig, ModelUpdate, PixelFormat, ScalePrior,
+    Shape, Similarity, TableMode, Tracker,
+};
+use rand_xoshiro::Xoshiro128PlusPlus;
 
-fuzz_target!(|input: (u8, u8, u8, [f32; 4], u64, &[u8])| {
-    let (w, h, code, b, seed, pixels) = input;
+fn config(pick: u8) -> Config {
+    let d = Config::default();
+    match pick % 8 {
+        0 => d,
+        1 => Config { quadrants: true, binning: Binning::Rgb4x4x4, ..d },
+        2 => Config { quadrants: true, binning: Binning::Adaptive, ..d },
+        3 => Config { similarity: Similarity::Intersection, ..d },
+        4 => Config { likelihood: pftrack::Likelihood { shape: Shape::Exponential, ..d.likelihood }, ..d },
+        5 => Config { model_update: ModelUpdate::WhenDegraded { factor: 0.9, frames: 2 }, ..d },
+        6 => Config { boundary: Some(BoundaryCue { weight: 0.3 }), ..d },
+        _ => Config { table: Some(TableMode { spacing: 1 }), ..d },
+    }
+}
+
+fuzz_target!(|input: (u8, u8, u8, u8, [f32; 4], u64, &[u8])| {
+    let (w, h, code, pick, b, seed, pixels) = input;
     let (w, h) = (usize::from(w % 48) + 1, usize::from(h % 48) + 1);
     let Some(format) = PixelFormat::from_code(u16::from(code % 4) + 1) else { return };
     let bpp = format.bytes_per_pixel();
@@ -14,8 +33,26 @@ fuzz_target!(|input: (u8, u8, u8, [f32; 4], u64, &[u8])| {
     if pixels.len() < frame_len || (format == PixelFormat::Yuv422 && w % 2 == 1) {
         return;
     }
-    let mut t: Box<Tracker<16>> = Box::new(Tracker::new(Config::default(), seed).expect("defaults are valid"));
     let Ok(first) = Frame::packed(&pixels[..frame_len], w, h, format) else { return };
+    if pick >= 128 {
+        let cfg = if pick & 1 == 0 { MeanShiftConfig::default() } else { MeanShiftConfig::kalman() };
+        let mut m: Box<MeanShift> = Box::new(MeanShift::new(cfg).expect("valid"));
+        if m.init(&first, BoundingBox::new(b[0], b[1], b[2], b[3])).is_err() {
+            return;
+        }
+        for k in 1..=4 {
+            let start = (k * 7919) % (pixels.len() - frame_len + 1);
+            let Ok(f) = Frame::packed(&pixels[start..start + frame_len], w, h, format) else { return };
+            let e = m.step(&f).expect("same frame size");
+            let el = e.ellipse;
+            assert!(el.cx.is_finite() && el.cy.is_finite() && el.hx.is_finite() && el.hy.is_finite(), "{el:?}");
+            assert!((0.0..=w as f32).contains(&el.cx) && (0.0..=h as f32).contains(&el.cy), "{el:?} in {w}x{h}");
+            assert!((0.0..=1.0).contains(&e.confidence));
+        }
+        return;
+    }
+    let mut t: Box<Tracker<16, 512, 4096, Xoshiro128PlusPlus, 1024>> =
+        Box::new(Tracker::new(config(pick), seed).expect("every picked configuration is valid"));
     if t.init(&first, BoundingBox::new(b[0], b[1], b[2], b[3])).is_err() {
         return;
     }
@@ -23,7 +60,15 @@ fuzz_target!(|input: (u8, u8, u8, [f32; 4], u64, &[u8])| {
     for k in 1..=4 {
         let start = (k * 7919) % (pixels.len() - frame_len + 1);
         let Ok(f) = Frame::packed(&pixels[start..start + frame_len], w, h, format) else { return };
-        let e = t.step(&f).expect("same frame size");
+        let e = if pick & 64 != 0 {
+            let prior = ScalePrior { half_minor: (b[2].abs() % 40.0).max(1.0), tolerance: 1.0 };
+            match t.step_with_prior(&f, prior) {
+                Ok(e) => e,
+                Err(_) => return, // a NaN box makes a NaN prior: rejected, as it should be
+            }
+        } else {
+            t.step(&f).expect("same frame size")
+        };
         let el = e.ellipse;
         assert!(el.cx.is_finite() && el.cy.is_finite() && el.hx.is_finite() && el.hy.is_finite(), "{el:?}");
         assert!((0.0..=w as f32).contains(&el.cx) && (0.0..=h as f32).contains(&el.cy), "{el:?} in {w}x{h}");

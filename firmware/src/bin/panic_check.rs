@@ -4,11 +4,36 @@
 //! Build only (CI does, for thumbv7em and thumbv6m):
 //! `cargo build --release --manifest-path firmware/Cargo.toml --target thumbv7em-none-eabihf --bin panic_check`.
 //! A deliberate `slice[i]` with an unknown `i` added here makes it fail, as it should.
+//! The configuration is picked by an input the optimiser cannot see, among
+//! the defaults and every optional technique (quadrants, adaptive bins,
+//! intersection, exponential likelihood, the degraded-model rule, boundary
+//! cue, likelihood table, scale prior), and the mean-shift baselines run too;
+//! CI links it with and without `--features all-options`, so the proof covers
+//! the optional code as well.
 #![no_std]
 #![no_main]
 
 use cortex_m_rt::entry;
-use pftrack::{BoundingBox, Config, Frame, PixelFormat, Tracker};
+use pftrack::{
+    Binning, BoundaryCue, BoundingBox, Config, Frame, MeanShift, MeanShiftConfig, ModelUpdate, PixelFormat, ScalePrior,
+    Shape, Similarity, TableMode, Tracker,
+};
+use rand_xoshiro::Xoshiro128PlusPlus;
+
+/// One of the configurations, by `pick`.
+fn config(pick: u8) -> Config {
+    let d = Config::default();
+    match pick % 8 {
+        0 => d,
+        1 => Config { quadrants: true, binning: Binning::Rgb4x4x4, ..d },
+        2 => Config { quadrants: true, binning: Binning::Adaptive, ..d },
+        3 => Config { similarity: Similarity::Intersection, ..d },
+        4 => Config { likelihood: pftrack::Likelihood { shape: Shape::Exponential, ..d.likelihood }, ..d },
+        5 => Config { model_update: ModelUpdate::WhenDegraded { factor: 0.9, frames: 5 }, ..d },
+        6 => Config { boundary: Some(BoundaryCue { weight: 0.3 }), ..d },
+        _ => Config { table: Some(TableMode { spacing: 2 }), ..d },
+    }
+}
 
 #[entry]
 fn main() -> ! {
@@ -19,25 +44,46 @@ fn main() -> ! {
     static mut OUT: f32 = 0.0;
     let base = PIXELS.as_ptr();
     // SAFETY: reads within PIXELS.
-    let (seed, w, x) = unsafe {
+    let (seed, w, x, pick) = unsafe {
         (
             core::ptr::read_volatile(base as *const u32) as u64,
             core::ptr::read_volatile(base.add(4)) as usize,
             f32::from_bits(core::ptr::read_volatile(base.add(8) as *const u32)),
+            core::ptr::read_volatile(base.add(12)),
         )
     };
-    let mut t = match Tracker::<100>::new(Config::default(), seed) {
+    let pixels: &[u8] = &PIXELS[..];
+    if pick >= 128 {
+        // The baselines.
+        let cfg = if pick & 1 == 0 { MeanShiftConfig::default() } else { MeanShiftConfig::kalman() };
+        if let (Ok(mut m), Ok(frame)) =
+            (MeanShift::<512>::new(cfg), Frame::new(pixels, 160 - (w & 1) * 2, 120, 320, PixelFormat::Rgb565))
+            && m.init(&frame, BoundingBox::new(x, x, 20.0, 20.0)).is_ok()
+        {
+            loop {
+                if let Ok(e) = m.step(&frame) {
+                    // SAFETY: OUT is this function's own static.
+                    unsafe { core::ptr::write_volatile(&raw mut *OUT, e.confidence) };
+                }
+            }
+        }
+    }
+    let mut t = match Tracker::<100, 512, 4096, Xoshiro128PlusPlus, 256>::new(config(pick), seed) {
         Ok(t) => t,
         Err(_) => loop {
             cortex_m::asm::wfi();
         },
     };
-    let pixels: &[u8] = &PIXELS[..];
     if let Ok(frame) = Frame::new(pixels, 160 - (w & 1) * 2, 120, 320, PixelFormat::Rgb565)
         && t.init(&frame, BoundingBox::new(x, x, 20.0, 20.0)).is_ok()
     {
         loop {
-            if let Ok(e) = t.step(&frame) {
+            let r = if pick & 64 != 0 {
+                t.step_with_prior(&frame, ScalePrior { half_minor: x, tolerance: 1.0 })
+            } else {
+                t.step(&frame)
+            };
+            if let Ok(e) = r {
                 // SAFETY: OUT is this function's own static.
                 unsafe { core::ptr::write_volatile(&raw mut *OUT, e.confidence) };
             }
