@@ -131,7 +131,7 @@ pub struct TableMode {
 }
 
 /// The ellipse-boundary gradient cue: each particle's mean normal gradient
-/// along its outline ([`crate::boundary::outline_gradient`]) divided by the
+/// along its outline (`boundary::outline_gradient`, built with the `boundary` feature) divided by the
 /// best particle's in the frame, mixed with the histogram similarity `s` as
 /// `(1 − weight) · s + weight · g`: the head-tracking paper's sum of
 /// normalised scores, weighted.
