@@ -208,7 +208,9 @@ impl Default for Config {
     }
 }
 
-fn check(field: &'static str, v: Real, lo: Real, hi: Real) -> Result<(), ConfigError> {
+/// `v` must be finite and in `[lo, hi]`; the error names `field`. The one
+/// range check of every configuration in the crate.
+pub(crate) fn check(field: &'static str, v: Real, lo: Real, hi: Real) -> Result<(), ConfigError> {
     if !v.is_finite() {
         return Err(ConfigError { field, problem: ParamProblem::NonFinite });
     }

@@ -6,7 +6,8 @@
 //! axis); an [`OutputPin`] LED shows whether the target is being tracked.
 //! While the target is lost or searched for, the head holds its position.
 
-use crate::error::{ConfigError, ParamProblem};
+use crate::config::check;
+use crate::error::ConfigError;
 use crate::scalar::{Real, clamp};
 use crate::tracker::{Estimate, TrackState};
 use embedded_hal::digital::OutputPin;
@@ -54,15 +55,6 @@ impl Default for FollowerConfig {
 impl FollowerConfig {
     /// Checks every field against its documented range.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        let check = |field: &'static str, v: Real, lo: Real, hi: Real| {
-            if !v.is_finite() {
-                Err(ConfigError { field, problem: ParamProblem::NonFinite })
-            } else if !(v >= lo && v <= hi) {
-                Err(ConfigError { field, problem: ParamProblem::OutOfRange })
-            } else {
-                Ok(())
-            }
-        };
         check("follower.kp", self.kp, 0.0, 1.0)?;
         check("follower.kd", self.kd, 0.0, 1.0)?;
         check("follower.dead_zone", self.dead_zone, 0.0, 0.99)?;

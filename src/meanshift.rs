@@ -51,6 +51,7 @@
 //! ```
 
 use crate::colour::Binning;
+use crate::config::check;
 use crate::error::{ConfigError, Error, ParamProblem, RegionError};
 use crate::frame::Frame;
 use crate::geometry::{BoundingBox, Ellipse};
@@ -133,15 +134,6 @@ impl MeanShiftConfig {
 
     /// Checks every field against its documented range.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        let check = |field: &'static str, v: Real, lo: Real, hi: Real| {
-            if !v.is_finite() {
-                Err(ConfigError { field, problem: ParamProblem::NonFinite })
-            } else if !(v >= lo && v <= hi) {
-                Err(ConfigError { field, problem: ParamProblem::OutOfRange })
-            } else {
-                Ok(())
-            }
-        };
         if !(1..=100).contains(&self.max_iterations) {
             return Err(ConfigError { field: "max_iterations", problem: ParamProblem::OutOfRange });
         }

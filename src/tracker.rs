@@ -206,15 +206,8 @@ pub struct ScalePrior {
 impl ScalePrior {
     fn validate(&self) -> Result<(), ConfigError> {
         let limit = (crate::frame::MAX_DIMENSION / 2) as Real;
-        for (field, v, lo) in [("prior.half_minor", self.half_minor, 1.0), ("prior.tolerance", self.tolerance, 0.0)] {
-            if !v.is_finite() {
-                return Err(ConfigError { field, problem: ParamProblem::NonFinite });
-            }
-            if !(v >= lo && v <= limit) {
-                return Err(ConfigError { field, problem: ParamProblem::OutOfRange });
-            }
-        }
-        Ok(())
+        crate::config::check("prior.half_minor", self.half_minor, 1.0, limit)?;
+        crate::config::check("prior.tolerance", self.tolerance, 0.0, limit)
     }
 
     /// Rescales `p` so that its shorter half axis is within the prior.

@@ -79,28 +79,16 @@ pub fn track_meanshift<'a>(
     config: MeanShiftConfig,
     frames: &[Frame<'a>],
     init: BoundingBox,
-    mut progress: impl FnMut(usize, usize),
+    progress: impl FnMut(usize, usize),
 ) -> Result<Run, pftrack::Error> {
     let mut tracker: Box<MeanShift> = Box::new(MeanShift::new(config)?);
     let first = frames.first().ok_or(pftrack::Error::NotInitialised)?;
     tracker.init(first, init)?;
-    let mut run = Run {
-        boxes: vec![init],
-        estimates: Vec::new(),
-        step_ms: Vec::new(),
-        threshold: config.min_similarity,
-        particles: Vec::new(),
-    };
-    for (i, f) in frames.iter().enumerate().skip(1) {
+    run_steps(frames, init, config.min_similarity, progress, |f| {
         let t0 = Instant::now();
         let est = tracker.step(f)?;
-        run.step_ms.push(t0.elapsed().as_secs_f64() * 1e3);
-        run.boxes.push(est.bbox());
-        run.estimates.push(est);
-        run.particles.push(Vec::new());
-        progress(i + 1, frames.len());
-    }
-    Ok(run)
+        Ok((est, ms_since(t0), Vec::new()))
+    })
 }
 
 /// Tracks `frames` with the particle filter, initialised on the first with
@@ -110,25 +98,43 @@ pub fn track<'a>(
     seed: u64,
     frames: &[Frame<'a>],
     init: BoundingBox,
-    mut progress: impl FnMut(usize, usize),
+    progress: impl FnMut(usize, usize),
 ) -> Result<Run, pftrack::Error> {
     let mut tracker = Box::new(HostTracker::new(config, seed)?);
     let first = frames.first().ok_or(pftrack::Error::NotInitialised)?;
     tracker.init(first, init)?;
-    let mut run = Run {
-        boxes: vec![init],
-        estimates: Vec::new(),
-        step_ms: Vec::new(),
-        threshold: tracker.appearance_threshold().unwrap_or(0.0),
-        particles: Vec::new(),
-    };
-    for (i, f) in frames.iter().enumerate().skip(1) {
+    let threshold = tracker.appearance_threshold().unwrap_or(0.0);
+    run_steps(frames, init, threshold, progress, |f| {
         let t0 = Instant::now();
         let est = tracker.step(f)?;
-        run.step_ms.push(t0.elapsed().as_secs_f64() * 1e3);
+        let ms = ms_since(t0);
+        Ok((est, ms, tracker.particles().iter().step_by(4).map(|p| (p.x, p.y)).collect()))
+    })
+}
+
+fn ms_since(t0: Instant) -> f64 {
+    t0.elapsed().as_secs_f64() * 1e3
+}
+
+/// The loop over frames 2.. shared by every tracker: `step` returns the
+/// estimate, the milliseconds its `step` call took (timed by the caller, so
+/// that collecting particles for pictures is not counted), and the particle
+/// centres to draw.
+fn run_steps<'a>(
+    frames: &[Frame<'a>],
+    init: BoundingBox,
+    threshold: f32,
+    mut progress: impl FnMut(usize, usize),
+    mut step: impl FnMut(&Frame<'a>) -> Result<(Estimate, f64, Vec<(f32, f32)>), pftrack::Error>,
+) -> Result<Run, pftrack::Error> {
+    let mut run =
+        Run { boxes: vec![init], estimates: Vec::new(), step_ms: Vec::new(), threshold, particles: Vec::new() };
+    for (i, f) in frames.iter().enumerate().skip(1) {
+        let (est, ms, particles) = step(f)?;
+        run.step_ms.push(ms);
         run.boxes.push(est.bbox());
         run.estimates.push(est);
-        run.particles.push(tracker.particles().iter().step_by(4).map(|p| (p.x, p.y)).collect());
+        run.particles.push(particles);
         progress(i + 1, frames.len());
     }
     Ok(run)
