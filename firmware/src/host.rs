@@ -36,12 +36,13 @@ impl HostFile {
         (fd >= 0).then_some(HostFile { fd: fd as usize })
     }
 
-    /// Fills `buf` completely; `false` if the file ends first.
-    pub fn read_exact(&mut self, buf: &mut [u8]) -> bool {
+    /// Reads into `buf` until it is full or the file ends; returns the
+    /// bytes read.
+    pub fn read(&mut self, buf: &mut [u8]) -> usize {
         // SAFETY: READ writes at most `buf.len()` bytes into `buf` and returns
         // how many it did NOT read.
         let not_read = unsafe { syscall!(READ, self.fd, buf.as_mut_ptr(), buf.len()) };
-        not_read == 0
+        buf.len().saturating_sub(not_read)
     }
 }
 
@@ -51,5 +52,59 @@ impl Drop for HostFile {
         unsafe {
             syscall!(CLOSE, self.fd);
         }
+    }
+}
+
+/// Why a fixture could not be streamed.
+pub enum StreamError {
+    /// The host could not open the file.
+    Open,
+    /// The header or a record is malformed, or the file ends early.
+    Fixture(pftrack_fixture::FixtureError),
+}
+
+impl core::fmt::Display for StreamError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            StreamError::Open => f.write_str("cannot open"),
+            StreamError::Fixture(e) => write!(f, "{e}"),
+        }
+    }
+}
+
+/// A `.pft` fixture read from the host one frame at a time, so that memory
+/// does not grow with its length.
+pub struct FixtureStream {
+    file: HostFile,
+    /// The fixture's header.
+    pub header: pftrack_fixture::Header,
+}
+
+impl FixtureStream {
+    /// Opens `path` and reads its header.
+    pub fn open(path: &str) -> Result<Self, StreamError> {
+        use pftrack_fixture::{FixtureError, HEADER_LEN, Header};
+        let mut file = HostFile::open(path).ok_or(StreamError::Open)?;
+        let mut bytes = [0u8; HEADER_LEN];
+        let len = file.read(&mut bytes);
+        if len < HEADER_LEN {
+            return Err(StreamError::Fixture(FixtureError::TruncatedHeader { len }));
+        }
+        let header = Header::parse(&bytes).map_err(StreamError::Fixture)?;
+        Ok(FixtureStream { file, header })
+    }
+
+    /// Reads frame `index` (the next one) into `pixels`, which must hold
+    /// `header.frame_len()` bytes, and returns its ground truth and visibility.
+    pub fn next(&mut self, index: u32, pixels: &mut [u8]) -> Result<pftrack_fixture::RecordMeta, StreamError> {
+        use pftrack_fixture::{FixtureError, RECORD_META_LEN, RecordMeta};
+        let mut meta = [0u8; RECORD_META_LEN];
+        let got = self.file.read(&mut meta);
+        let got = if got == RECORD_META_LEN { got + self.file.read(pixels) } else { got };
+        let expected_len = RECORD_META_LEN + pixels.len();
+        if got < expected_len {
+            return Err(StreamError::Fixture(FixtureError::TruncatedFrame { index, expected_len, actual_len: got }));
+        }
+        RecordMeta::parse(&meta, index).map_err(StreamError::Fixture)
     }
 }

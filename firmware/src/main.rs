@@ -19,7 +19,6 @@ use cortex_m_semihosting::hio;
 #[cfg(feature = "defmt")]
 use defmt_semihosting as _;
 use pftrack::{BoundingBox, Config, Estimate, Frame, MeanShift, MeanShiftConfig, Tracker};
-use pftrack_fixture::{HEADER_LEN, Header, RECORD_META_LEN, RecordMeta};
 
 /// The largest frame the firmware holds: QVGA RGB565. Frames are streamed
 /// one at a time through this buffer, so memory does not grow with length.
@@ -97,16 +96,11 @@ fn run() -> bool {
         Some(Err(_)) => fail!("seed is not a number"),
     };
     let kind = words.next().unwrap_or("pf");
-    let Some(mut file) = host::HostFile::open(path) else { fail!("cannot open {path}") };
-
-    let mut header = [0u8; HEADER_LEN];
-    if !file.read_exact(&mut header) {
-        fail!("{path}: shorter than a fixture header");
-    }
-    let h = match Header::parse(&header) {
-        Ok(h) => h,
+    let mut stream = match host::FixtureStream::open(path) {
+        Ok(s) => s,
         Err(e) => fail!("{path}: {e}"),
     };
+    let h = stream.header;
     let (format, width, height, stride, count) = (h.format, h.width, h.height, h.stride, h.frames);
     let frame_len = h.frame_len();
     if frame_len > FRAME_BYTES {
@@ -138,12 +132,8 @@ fn run() -> bool {
     let mut init_stack = None;
     let mut measured = 0usize;
     for i in 0..count as usize {
-        let mut meta = [0u8; RECORD_META_LEN];
         let buf = &mut pixels[..frame_len];
-        if !file.read_exact(&mut meta) || !file.read_exact(buf) {
-            fail!("{path}: file ends inside frame {i}");
-        }
-        let meta = match RecordMeta::parse(&meta, i as u32) {
+        let meta = match stream.next(i as u32, buf) {
             Ok(m) => m,
             Err(e) => fail!("{path}: {e}"),
         };

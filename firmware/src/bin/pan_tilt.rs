@@ -29,7 +29,6 @@ use embedded_hal::digital::{ErrorType as PinErrorType, OutputPin};
 use embedded_hal::pwm::{ErrorType as PwmErrorType, SetDutyCycle};
 use pftrack::follower::{FollowerConfig, PanTilt};
 use pftrack::{Config, Frame, TrackState, Tracker};
-use pftrack_fixture::{HEADER_LEN, Header, RECORD_META_LEN, RecordMeta};
 
 /// Largest frame held: QQVGA RGB565 would do for the committed fixtures.
 const FRAME_BYTES: usize = 320 * 240 * 2;
@@ -102,15 +101,11 @@ fn run() -> bool {
         Some(Ok(s)) => s,
         Some(Err(_)) => fail!("seed is not a number"),
     };
-    let Some(mut file) = host::HostFile::open(path) else { fail!("cannot open {path}") };
-    let mut header = [0u8; HEADER_LEN];
-    if !file.read_exact(&mut header) {
-        fail!("{path}: shorter than a fixture header");
-    }
-    let h = match Header::parse(&header) {
-        Ok(h) => h,
+    let mut stream = match host::FixtureStream::open(path) {
+        Ok(s) => s,
         Err(e) => fail!("{path}: {e}"),
     };
+    let h = stream.header;
     if h.frame_len() > FRAME_BYTES {
         fail!("frames of {} bytes do not fit {FRAME_BYTES}", h.frame_len());
     }
@@ -129,12 +124,8 @@ fn run() -> bool {
     let dead_zone = FollowerConfig::default().dead_zone;
     let (mut agree, mut moves) = (0u32, 0u32);
     for i in 0..h.frames {
-        let mut meta = [0u8; RECORD_META_LEN];
         let buf = &mut pixels[..h.frame_len()];
-        if !file.read_exact(&mut meta) || !file.read_exact(buf) {
-            fail!("{path}: file ends inside frame {i}");
-        }
-        let meta = match RecordMeta::parse(&meta, i) {
+        let meta = match stream.next(i, buf) {
             Ok(m) => m,
             Err(e) => fail!("{path}: {e}"),
         };
