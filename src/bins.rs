@@ -17,7 +17,7 @@ use crate::colour::{ADAPTIVE_LEVELS, levels_bin};
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
 use crate::histogram::Histogram;
-use crate::region::{Lattice, floor, for_each_row};
+use crate::region::{Lattice, floor, for_each_row, quadrant};
 use crate::scalar::{Real, ln, sqrt};
 
 /// The Birgé–Rozenholc score `Σ M_j ln(K M_j / n) − (K − 1 + (ln K)^2.5)` of
@@ -67,7 +67,7 @@ pub(crate) fn choose_levels<const K: usize>(
     let seg = K / segments;
     let (lo, hi) = ADAPTIVE_LEVELS;
     let mut best = [(Real::NEG_INFINITY, lo); 4];
-    let (cx, cy) = (floor(e.cx), floor(e.cy));
+    let centre = (floor(e.cx), floor(e.cy));
     for levels in lo..=hi {
         let cells = (levels as usize).pow(3);
         if cells > seg {
@@ -76,9 +76,8 @@ pub(crate) fn choose_levels<const K: usize>(
         hist.clear();
         for_each_row(frame, e, lattice, |span| {
             let y = span.y;
-            let top = if segments == 4 && y as i32 >= cy { 2 } else { 0 };
             for (x, _) in span {
-                let q = top + (segments == 4 && x as i32 >= cx) as usize;
+                let q = if segments == 4 { quadrant(x, y, centre) } else { 0 };
                 if let Some(rgb) = frame.rgb(x, y) {
                     hist.add(q * seg + levels_bin(rgb, levels), 1);
                 }

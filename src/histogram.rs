@@ -13,7 +13,7 @@
 use crate::colour::{Binning, Quantise, Rgb8x8x8, levels_bin};
 use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
 use crate::geometry::Ellipse;
-use crate::region::{Lattice, Sampling, floor, for_each_row};
+use crate::region::{Lattice, Sampling, floor, for_each_row, quadrant};
 use crate::scalar::{Real, sqrt_q4};
 
 /// How the bins of a histogram are laid out: the colour binning, whether the
@@ -153,15 +153,14 @@ impl<const K: usize> Histogram<K> {
         let (counts, mut total) = (&mut self.counts, 0u32);
         let quads = cfg!(feature = "quadrants") && layout.segments == 4;
         let seg = K / layout.segments.max(1) as usize;
-        let (cx, cy) = (floor(e.cx), floor(e.cy));
+        let centre = (floor(e.cx), floor(e.cy));
         let (binning, levels) = (layout.binning, layout.levels);
         for_each_row(frame, e, lattice, |span| {
             let y = span.y;
             sink.row(y);
-            let top = if quads && y as i32 >= cy { 2 } else { 0 };
             for (x, w) in span {
                 sink.pixel(x, w);
-                let q = top + (quads && x as i32 >= cx) as usize;
+                let q = if quads { quadrant(x, y, centre) } else { 0 };
                 if let Some(rgb) = frame.rgb(x, y) {
                     let b = match binning {
                         Binning::Adaptive => levels_bin(rgb, levels.get(q).copied().unwrap_or(2)),
@@ -215,16 +214,22 @@ pub(crate) fn for_each_bin<F: FnMut(usize, usize, usize)>(
     lattice: Lattice,
     mut visit: F,
 ) {
+    // Chosen once per region, not per pixel: RGB565 camera frames with the
+    // default binning read bins straight from the packed bits.
+    let packed = binning == Binning::Rgb8x8x8 && frame.format() == PixelFormat::Rgb565;
     for_each_row(frame, e, lattice, |span| {
-        let y = span.y;
-        let row = span.row;
-        for (x, _) in span {
-            let bin = match (binning, frame.format()) {
-                (Binning::Rgb8x8x8, PixelFormat::Rgb565) => Rgb8x8x8::bin::<Rgb565>(row, x),
-                _ => frame.rgb(x, y).map(|rgb| binning.bin(rgb)),
-            };
-            if let Some(bin) = bin {
-                visit(x, y, bin);
+        let (y, row) = (span.y, span.row);
+        if packed {
+            for (x, _) in span {
+                if let Some(bin) = Rgb8x8x8::bin::<Rgb565>(row, x) {
+                    visit(x, y, bin);
+                }
+            }
+        } else {
+            for (x, _) in span {
+                if let Some(rgb) = frame.rgb(x, y) {
+                    visit(x, y, binning.bin(rgb));
+                }
             }
         }
     });

@@ -295,16 +295,7 @@ impl<const K: usize> MeanShift<K> {
         });
         self.state = TrackState::Tracking;
         self.misses = 0;
-        Ok(Estimate {
-            ellipse: e,
-            confidence: 1.0,
-            state: TrackState::Tracking,
-            event: Some(Event::Initialised),
-            appearing: 1,
-            model_updated: false,
-            sigma: 0.0,
-            occluded_quadrant: None,
-        })
+        Ok(Estimate::initialised(e, 1, 0.0))
     }
 
     /// Tracks one frame. The estimate's `confidence` is the final ρ,

@@ -91,6 +91,15 @@ impl Lattice {
     }
 }
 
+/// The quadrant of pixel `(x, y)` in an ellipse centred on pixel `centre`:
+/// 0 top-left, 1 top-right, 2 bottom-left, 3 bottom-right (the centre row
+/// and column count as bottom and right). The one definition of the
+/// quadrant layout, shared by the histograms and the bin-count choice.
+#[inline(always)]
+pub(crate) fn quadrant(x: usize, y: usize, centre: (i32, i32)) -> usize {
+    (x as i32 >= centre.0) as usize + 2 * (y as i32 >= centre.1) as usize
+}
+
 /// The rows of an ellipse as the region walk sees them: for each row offset
 /// `dy` from the centre pixel, the half width `d` of the pixels it visits
 /// (`|dx| <= d`), the pixels whose kernel weight is non-zero. The same for

@@ -70,6 +70,20 @@ pub struct Estimate {
 }
 
 impl Estimate {
+    /// The estimate a tracker reports when it is initialised on ellipse `e`.
+    pub(crate) fn initialised(e: Ellipse, appearing: u16, sigma: Real) -> Self {
+        Estimate {
+            ellipse: e,
+            confidence: 1.0,
+            state: TrackState::Tracking,
+            event: Some(Event::Initialised),
+            appearing,
+            model_updated: false,
+            sigma,
+            occluded_quadrant: None,
+        }
+    }
+
     /// The estimate as a box (the ellipse's bounding box).
     pub fn bbox(&self) -> BoundingBox {
         self.ellipse.to_box()
@@ -477,16 +491,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         self.target = Some(target);
         self.state = TrackState::Tracking;
         self.misses = 0;
-        Ok(Estimate {
-            ellipse: e,
-            confidence: 1.0,
-            state: TrackState::Tracking,
-            event: Some(Event::Initialised),
-            appearing: N as u16,
-            model_updated: false,
-            sigma: self.config.likelihood.sigma_for(0.0),
-            occluded_quadrant: None,
-        })
+        Ok(Estimate::initialised(e, N as u16, self.config.likelihood.sigma_for(0.0)))
     }
 
     /// Learns the target from `bbox` in a reference `frame`, then searches

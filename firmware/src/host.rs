@@ -6,7 +6,7 @@ use cortex_m_semihosting::{nr, syscall};
 
 /// The command line the host passed (`-semihosting-config arg=…`), with the
 /// program name first, as space-separated words in `buf`.
-pub fn cmdline(buf: &mut [u8]) -> Option<&str> {
+fn cmdline(buf: &mut [u8]) -> Option<&str> {
     let mut block = [buf.as_mut_ptr() as usize, buf.len()];
     // SAFETY: GET_CMDLINE writes at most `block[1]` bytes into `block[0]`,
     // which is `buf`, and stores the length written back into `block[1]`;
@@ -17,6 +17,29 @@ pub fn cmdline(buf: &mut [u8]) -> Option<&str> {
     }
     let len = block.get(1).copied().unwrap_or(0).min(buf.len());
     core::str::from_utf8(buf.get(..len)?).ok()
+}
+
+/// The firmware's command line, `FIXTURE [SEED [EXTRA]]`.
+pub struct Args<'a> {
+    /// The fixture's path, or the caller's default.
+    pub path: &'a str,
+    /// The tracker's seed, 1 if not given.
+    pub seed: u64,
+    /// A third word, if any.
+    pub extra: Option<&'a str>,
+}
+
+/// Parses the command line into `buf`; the error says what is wrong.
+pub fn args<'a>(buf: &'a mut [u8], default_path: &'a str) -> Result<Args<'a>, &'static str> {
+    let line = cmdline(buf).unwrap_or("");
+    let mut words = line.split_ascii_whitespace().skip(1);
+    let path = words.next().unwrap_or(default_path);
+    let seed = match words.next().map(str::parse) {
+        None => 1,
+        Some(Ok(s)) => s,
+        Some(Err(_)) => return Err("seed is not a number"),
+    };
+    Ok(Args { path, seed, extra: words.next() })
 }
 
 /// A host file opened for reading.

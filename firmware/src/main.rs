@@ -87,15 +87,10 @@ fn run() -> bool {
     }
 
     let mut args_buf = [0u8; 256];
-    let args = host::cmdline(&mut args_buf).unwrap_or("");
-    let mut words = args.split_ascii_whitespace().skip(1);
-    let path = words.next().unwrap_or("fixtures/occlusion.pft");
-    let seed: u64 = match words.next().map(str::parse) {
-        None => 1,
-        Some(Ok(s)) => s,
-        Some(Err(_)) => fail!("seed is not a number"),
+    let (path, seed, kind) = match host::args(&mut args_buf, "fixtures/occlusion.pft") {
+        Ok(a) => (a.path, a.seed, a.extra.unwrap_or("pf")),
+        Err(e) => fail!("{e}"),
     };
-    let kind = words.next().unwrap_or("pf");
     let mut stream = match host::FixtureStream::open(path) {
         Ok(s) => s,
         Err(e) => fail!("{path}: {e}"),

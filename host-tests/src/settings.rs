@@ -41,55 +41,53 @@ fn num(key: &str, v: &str) -> Result<f32, String> {
     v.parse::<f32>().map_err(|_| format!("{key}: `{v}` is not a number"))
 }
 
+/// The value named `v` among `options`; the error lists the names.
+fn choice<T: Copy>(key: &str, v: &str, options: &[(&str, T)]) -> Result<T, String> {
+    if let Some(&(_, t)) = options.iter().find(|(name, _)| *name == v) {
+        return Ok(t);
+    }
+    let names: Vec<&str> = options.iter().map(|(n, _)| *n).collect();
+    Err(format!("{key}: `{v}` is not one of {}", names.join(", ")))
+}
+
 /// Applies one `key=value` setting to `c`.
 pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
     let (key, v) = setting.split_once('=').ok_or_else(|| format!("`{setting}`: expected key=value"))?;
     let (key, v) = (key.trim(), v.trim());
     match key {
         "sampling" => {
-            c.sampling = match v {
-                "full" => Sampling::Full,
-                "checkerboard" => Sampling::Checkerboard,
-                "quarter" => Sampling::Quarter,
-                _ => return Err(format!("sampling: `{v}` is not full, checkerboard or quarter")),
-            }
+            c.sampling = choice(
+                key,
+                v,
+                &[("full", Sampling::Full), ("checkerboard", Sampling::Checkerboard), ("quarter", Sampling::Quarter)],
+            )?
         }
         "resampling" => {
-            c.resampling = match v {
-                "multinomial" => Resampling::Multinomial,
-                "systematic" => Resampling::Systematic,
-                _ => return Err(format!("resampling: `{v}` is not multinomial or systematic")),
-            }
+            c.resampling =
+                choice(key, v, &[("multinomial", Resampling::Multinomial), ("systematic", Resampling::Systematic)])?
         }
         "binning" => {
-            c.binning = match v {
-                "rgb8x8x8" => Binning::Rgb8x8x8,
-                "hsv8x8x4" => Binning::Hsv8x8x4,
-                "rgb4x4x4" => Binning::Rgb4x4x4,
-                "adaptive" => Binning::Adaptive,
-                _ => return Err(format!("binning: `{v}` is not rgb8x8x8, hsv8x8x4, rgb4x4x4 or adaptive")),
-            }
+            c.binning = choice(
+                key,
+                v,
+                &[
+                    ("rgb8x8x8", Binning::Rgb8x8x8),
+                    ("hsv8x8x4", Binning::Hsv8x8x4),
+                    ("rgb4x4x4", Binning::Rgb4x4x4),
+                    ("adaptive", Binning::Adaptive),
+                ],
+            )?
         }
-        "quadrants" => {
-            c.quadrants = match v {
-                "on" => true,
-                "off" => false,
-                _ => return Err(format!("quadrants: `{v}` is not on or off")),
-            }
-        }
+        "quadrants" => c.quadrants = choice(key, v, &[("on", true), ("off", false)])?,
         "similarity" => {
-            c.similarity = match v {
-                "bhattacharyya" => Similarity::Bhattacharyya,
-                "intersection" => Similarity::Intersection,
-                _ => return Err(format!("similarity: `{v}` is not bhattacharyya or intersection")),
-            }
+            c.similarity = choice(
+                key,
+                v,
+                &[("bhattacharyya", Similarity::Bhattacharyya), ("intersection", Similarity::Intersection)],
+            )?
         }
         "shape" => {
-            c.likelihood.shape = match v {
-                "gaussian" => Shape::Gaussian,
-                "exponential" => Shape::Exponential,
-                _ => return Err(format!("shape: `{v}` is not gaussian or exponential")),
-            }
+            c.likelihood.shape = choice(key, v, &[("gaussian", Shape::Gaussian), ("exponential", Shape::Exponential)])?
         }
         "model_update" => {
             c.model_update = if v == "confident" {

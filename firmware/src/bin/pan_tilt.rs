@@ -93,13 +93,10 @@ fn run() -> bool {
         }};
     }
     let mut args_buf = [0u8; 256];
-    let args = host::cmdline(&mut args_buf).unwrap_or("");
-    let mut words = args.split_ascii_whitespace().skip(1);
-    let path = words.next().unwrap_or("fixtures/smooth_scale.pft");
-    let seed: u64 = match words.next().map(str::parse) {
-        None => 1,
-        Some(Ok(s)) => s,
-        Some(Err(_)) => fail!("seed is not a number"),
+    let (path, seed) = match host::args(&mut args_buf, "fixtures/smooth_scale.pft") {
+        Ok(host::Args { extra: Some(w), .. }) => fail!("unexpected `{w}`: the arguments are FIXTURE [SEED]"),
+        Ok(a) => (a.path, a.seed),
+        Err(e) => fail!("{e}"),
     };
     let mut stream = match host::FixtureStream::open(path) {
         Ok(s) => s,
