@@ -107,13 +107,22 @@ def main():
     ap.add_argument("seqs", nargs="+", type=pathlib.Path)
     args = ap.parse_args()
     names = args.only.split(",") if args.only else list(TRACKERS)
+    unknown = [n for n in names if n not in TRACKERS]
+    if unknown:
+        sys.exit(f"error: unknown tracker(s) {', '.join(unknown)}; known: {', '.join(TRACKERS)}")
     cv2.setNumThreads(1)  # per-frame times comparable with the single-threaded core
     for seq in args.seqs:
-        truth = load_truth(seq)
-        paths = frames(seq)
-        if len(paths) != len(truth):
-            sys.exit(f"{seq}: {len(paths)} images but {len(truth)} boxes")
+        # Bad input is a one-line error naming the sequence, not a traceback.
+        try:
+            truth = load_truth(seq)
+            paths = frames(seq)
+        except (OSError, ValueError) as e:
+            sys.exit(f"error: {seq}: {e}")
+        if not truth or len(paths) != len(truth):
+            sys.exit(f"error: {seq}: {len(paths)} images but {len(truth)} boxes")
         images = [cv2.imread(str(p), cv2.IMREAD_COLOR) for p in paths]
+        if any(img is None for img in images):
+            sys.exit(f"error: {seq}: an image could not be decoded")
         for name in names:
             tracker = TRACKERS[name]()
             tracker.init(images[0], truth[0])

@@ -52,6 +52,9 @@ pub struct Run {
     pub step_ms: Vec<f64>,
     /// The appearance threshold the tracker learnt at initialisation.
     pub threshold: f32,
+    /// Levels per colour channel of each histogram block, as chosen at
+    /// initialisation (meaningful for adaptive binning; `None` for mean shift).
+    pub colour_levels: Option<[u8; 4]>,
     /// Every 4th particle's centre after each step (for pictures).
     pub particles: Vec<Vec<(f32, f32)>>,
 }
@@ -104,12 +107,15 @@ pub fn track<'a>(
     let first = frames.first().ok_or(pftrack::Error::NotInitialised)?;
     tracker.init(first, init)?;
     let threshold = tracker.appearance_threshold().unwrap_or(0.0);
-    run_steps(frames, init, threshold, progress, |f| {
+    let levels = tracker.colour_levels();
+    let mut run = run_steps(frames, init, threshold, progress, |f| {
         let t0 = Instant::now();
         let est = tracker.step(f)?;
         let ms = ms_since(t0);
         Ok((est, ms, tracker.particles().iter().step_by(4).map(|p| (p.x, p.y)).collect()))
-    })
+    })?;
+    run.colour_levels = levels;
+    Ok(run)
 }
 
 fn ms_since(t0: Instant) -> f64 {
@@ -127,8 +133,14 @@ fn run_steps<'a>(
     mut progress: impl FnMut(usize, usize),
     mut step: impl FnMut(&Frame<'a>) -> Result<(Estimate, f64, Vec<(f32, f32)>), pftrack::Error>,
 ) -> Result<Run, pftrack::Error> {
-    let mut run =
-        Run { boxes: vec![init], estimates: Vec::new(), step_ms: Vec::new(), threshold, particles: Vec::new() };
+    let mut run = Run {
+        boxes: vec![init],
+        estimates: Vec::new(),
+        step_ms: Vec::new(),
+        threshold,
+        colour_levels: None,
+        particles: Vec::new(),
+    };
     for (i, f) in frames.iter().enumerate().skip(1) {
         let (est, ms, particles) = step(f)?;
         run.step_ms.push(ms);

@@ -262,6 +262,9 @@ fn evaluate(seq: &Loaded, method: Method, config: Config, seed: u64) -> Result<(
 
 fn print_frames(seq: &Loaded, run: &Run) {
     println!("appearance threshold: {:.3}", run.threshold);
+    if let Some(l) = run.colour_levels {
+        println!("colour levels per channel: {l:?} (the first for the whole ellipse; with quadrants, TL TR BL BR)");
+    }
     println!("{:>5} {:>9} {:>11} {:>5} {:>4} {:>27} {:>27}", "frame", "state", "event", "conf", "app", "box", "truth");
     for (i, e) in run.estimates.iter().enumerate() {
         let b = e.bbox();
