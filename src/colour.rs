@@ -1,6 +1,5 @@
 //! Colour quantisation: how a pixel's colour maps to a histogram bin.
 
-use crate::frame::PixelRead;
 
 /// How a colour maps to a histogram bin. A component of the configuration;
 /// a histogram's capacity `K` must be at least [`Binning::bins`].
@@ -61,22 +60,6 @@ pub fn levels_bin([r, g, b]: [u8; 3], levels: u8) -> usize {
     let l = levels as usize;
     let q = |c: u8| (c as usize * l) >> 8;
     (q(r) * l + q(g)) * l + q(b)
-}
-
-/// A binning compiled into the histogram loop (a zero-sized type), so the
-/// loop has no per-pixel branch on the choice.
-pub(crate) trait Quantise {
-    /// The bin of pixel `x` of `row` in format `P`.
-    fn bin<P: PixelRead>(row: &[u8], x: usize) -> Option<usize>;
-}
-
-/// [`Binning::Rgb8x8x8`], compiled in.
-pub(crate) struct Rgb8x8x8;
-impl Quantise for Rgb8x8x8 {
-    #[inline(always)]
-    fn bin<P: PixelRead>(row: &[u8], x: usize) -> Option<usize> {
-        P::rgb_8x8x8(row, x)
-    }
 }
 
 /// `min(floor(8 · num / den), 7)` for `den > 0`, exactly, by a three-step

@@ -11,7 +11,7 @@
 //! histograms make, with no allocation and a bounded cost.
 
 use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
-use crate::histogram::{Histogram, RowSink};
+use crate::region::{Lattice, RowSpan, Sampling, div_small};
 
 /// Directions at `k · 11.25°` for `k = 0..16`, as `(cos, sin) · 4096`: the
 /// orientation bin boundaries for 2, 4, 8 or 16 bins over 0–180°.
@@ -37,7 +37,7 @@ const DIRECTIONS: [(i32, i32); 16] = [
 /// Map cell value of a pixel that counts in no bin: weak (unless weak
 /// pixels have a bin of their own), on the frame border where the 3x3 Sobel
 /// window does not fit, or not computed.
-const NONE: u8 = u8::MAX;
+pub(crate) const NONE: u8 = u8::MAX;
 
 /// The orientation bin of gradient `(gx, gy)` among `bins` equal sectors of
 /// 0–180°, by sector tests with integer cross products (no `atan`).
@@ -70,24 +70,42 @@ pub struct EdgeParams {
     pub bins: usize,
     /// Gradient strength below which a pixel is weak.
     pub threshold: u16,
-    /// The finest grid spacing worth computing, in pixels.
-    pub min_spacing: usize,
+    /// The sampling of the histograms that will read the map: the map has
+    /// a cell for each of their pixels, and no other.
+    pub sampling: Sampling,
+    /// Rows and columns between the histograms' samples (at least the
+    /// sampling's own: 1, or 2 for [`Sampling::Quarter`]).
+    pub step: usize,
     /// Whether weak pixels count in a bin of their own (bin `bins`), so the
     /// histogram also says how much of the region has edges at all.
     pub flat_bin: bool,
 }
 
+/// The value of a 4-bit cell with no bin (see [`EdgeMap`]).
+pub(crate) const NIBBLE_NONE: u8 = 15;
+
 /// A per-frame map of quantised edge orientations over a region of the
-/// frame, in a fixed buffer of `E` cells.
+/// frame, in a fixed buffer of `E` bytes: one cell per pixel of the
+/// sampling lattice (see [`EdgeParams`]), so that a histogram reads its
+/// samples' cells one after another. Cells take 4 bits (two per byte, so
+/// `2·E` of them) when every value fits, that is with at most 8
+/// orientation bins; 16 bins take a byte per cell.
 #[derive(Clone, Debug)]
 pub struct EdgeMap<const E: usize> {
-    cells: [u8; E],
-    x0: usize,
-    y0: usize,
+    bytes: [u8; E],
+    lattice: Lattice,
+    /// First lattice row and column (`y = j·step`; `x = phase(y) + k·x_step`).
+    j0: usize,
+    k0: usize,
     cols: usize,
     rows: usize,
-    /// Grid spacing is `1 << shift` pixels.
+    /// One cell per `2^shift` lattice rows and columns.
     shift: u32,
+    /// Two 4-bit cells per byte, low nibble first ([`NIBBLE_NONE`] for no
+    /// bin); else one byte per cell ([`NONE`] for no bin).
+    nibbles: bool,
+    /// Bytes per map row (rows start on a byte).
+    stride: usize,
 }
 
 impl<const E: usize> Default for EdgeMap<E> {
@@ -99,73 +117,120 @@ impl<const E: usize> Default for EdgeMap<E> {
 impl<const E: usize> EdgeMap<E> {
     /// An empty map (every lookup is weak).
     pub const fn new() -> Self {
-        EdgeMap { cells: [NONE; E], x0: 0, y0: 0, cols: 0, rows: 0, shift: 0 }
+        EdgeMap {
+            bytes: [NONE; E],
+            lattice: Lattice::FULL,
+            j0: 0,
+            k0: 0,
+            cols: 0,
+            rows: 0,
+            shift: 0,
+            nibbles: false,
+            stride: 0,
+        }
     }
 
-    /// Grid spacing in pixels: 1 when the region fits the buffer at full resolution.
+    /// Lattice points per cell side: 1 when every sampled pixel has its own
+    /// cell, 2, 4, … when the region did not fit.
     pub fn spacing(&self) -> usize {
         1 << self.shift
     }
 
-    /// Computes orientations over the pixel rectangle `[x0, x1) × [y0, y1)`
-    /// (clipped to the frame), dropping gradients with
-    /// `sqrt(gx² + gy²) < threshold`. The grid spacing is the largest power
-    /// of two not above `min_spacing` (a histogram that reads every 4th pixel
-    /// needs no finer map), or coarser if the region does not fit `E` cells.
+    /// Computes orientations at the sampled pixels (see [`EdgeParams`]) of
+    /// the pixel rectangle `[x0, x1) × [y0, y1)` (clipped to the frame),
+    /// dropping gradients with `sqrt(gx² + gy²) < threshold`. If the region
+    /// has more sampled pixels than the map has cells, the map keeps every
+    /// 2nd (4th, …) lattice row and column, and a pixel reads the cell at or
+    /// before it.
     pub fn compute(&mut self, frame: &Frame<'_>, rect: (usize, usize, usize, usize), params: EdgeParams) {
-        match frame.format() {
-            PixelFormat::Rgb565 => self.compute_as::<Rgb565>(frame, rect, params),
-            PixelFormat::Rgb888 => self.compute_as::<Rgb888>(frame, rect, params),
-            PixelFormat::Yuv422 => self.compute_as::<Yuv422>(frame, rect, params),
-            PixelFormat::Gray8 => self.compute_as::<Gray8>(frame, rect, params),
-        }
+        let lattice = Lattice::with_step(params.sampling, params.step);
+        self.compute_on(frame, rect, params.bins, params.threshold, params.flat_bin, lattice);
     }
 
-    fn compute_as<P: PixelRead>(&mut self, frame: &Frame<'_>, rect: (usize, usize, usize, usize), p: EdgeParams) {
-        let EdgeParams { bins, threshold, min_spacing, flat_bin } = p;
-        let weak = if flat_bin { bins.min(16) as u8 } else { NONE };
+    /// [`EdgeMap::compute`] on an explicit lattice.
+    pub(crate) fn compute_on(
+        &mut self,
+        frame: &Frame<'_>,
+        rect: (usize, usize, usize, usize),
+        bins: usize,
+        threshold: u16,
+        flat_bin: bool,
+        lattice: Lattice,
+    ) {
+        let bins = bins.min(16);
+        let weak = if flat_bin { bins as u8 } else { NONE };
+        let nibbles = bins + (flat_bin as usize) < NIBBLE_NONE as usize;
         let (x0, y0, x1, y1) = rect;
         let (w, h) = (frame.width(), frame.height());
         let (x0, y0) = (x0.min(w), y0.min(h));
         let (x1, y1) = (x1.max(x0).min(w), y1.max(y0).min(h));
-        // Start at the spacing the histograms need, coarsen until the region fits.
+        let (s, xs) = (lattice.step(), lattice.x_step());
+        // Lattice rows j with y0 <= j·s < y1; columns k of any row's phase
+        // (0 or s) with x0 <= phase + k·xs < x1, a superset for the other phase.
+        let j0 = y0.div_ceil(s);
+        let rows_l = y1.div_ceil(s).saturating_sub(j0);
+        let k0 = x0.saturating_sub(lattice.phase(s)) / xs;
+        let cols_l = x1.div_ceil(xs).saturating_sub(k0);
+        let size = |shift: u32| {
+            let cols = cols_l.div_ceil(1 << shift);
+            let stride = if nibbles { cols.div_ceil(2) } else { cols };
+            (cols, stride, rows_l.div_ceil(1 << shift))
+        };
         let mut shift = 0;
-        while shift < 12 && (2usize << shift) <= min_spacing {
+        while shift < 16 && {
+            let (_, stride, rows) = size(shift);
+            stride.saturating_mul(rows) > E
+        } {
             shift += 1;
         }
-        while shift < 12 && ((x1 - x0) >> shift).max(1) * ((y1 - y0) >> shift).max(1) > E {
-            shift += 1;
-        }
-        let d = 1usize << shift;
-        let cols = (x1 - x0).div_ceil(d).min(E);
-        let rows = (y1 - y0).div_ceil(d);
-        let rows = E.checked_div(cols).map_or(0, |fit| rows.min(fit));
-        // Field by field: rebuilding the struct would copy the cell buffer
+        let (cols, stride, rows) = size(shift);
+        let (cols, stride) = if stride > E { (0, 0) } else { (cols, stride) };
+        let rows = E.checked_div(stride).map_or(0, |fit| rows.min(fit));
+        // Field by field: rebuilding the struct would copy the buffer
         // through the stack.
-        (self.x0, self.y0, self.cols, self.rows, self.shift) = (x0, y0, cols, rows, shift);
+        (self.lattice, self.j0, self.k0, self.cols, self.rows, self.shift) = (lattice, j0, k0, cols, rows, shift);
+        (self.nibbles, self.stride) = (nibbles, stride);
+        match frame.format() {
+            PixelFormat::Rgb565 => self.fill::<Rgb565>(frame, bins, threshold, weak),
+            PixelFormat::Rgb888 => self.fill::<Rgb888>(frame, bins, threshold, weak),
+            PixelFormat::Yuv422 => self.fill::<Yuv422>(frame, bins, threshold, weak),
+            PixelFormat::Gray8 => self.fill::<Gray8>(frame, bins, threshold, weak),
+        }
+    }
+
+    fn fill<P: PixelRead>(&mut self, frame: &Frame<'_>, bins: usize, threshold: u16, weak: u8) {
+        let (w, h) = (frame.width(), frame.height());
+        let (s, xs) = (self.lattice.step(), self.lattice.x_step());
+        let (cols, stride, shift, nibbles) = (self.cols, self.stride, self.shift, self.nibbles);
         let t2 = threshold as i32 * threshold as i32;
         let empty: &[u8] = &[];
-        for j in 0..rows {
-            let y = y0 + j * d;
-            let out = self.cells.get_mut(j * cols..(j + 1) * cols).unwrap_or_default();
-            // The Sobel window needs rows y-1..=y+1: the border rows are weak.
+        for j in 0..self.rows {
+            let y = (self.j0 + (j << shift)) * s;
+            let x_first = self.lattice.phase(y) + self.k0 * xs;
+            let dx = xs << shift;
+            let out = self.bytes.get_mut(j * stride..(j + 1) * stride).unwrap_or_default();
+            // The Sobel window needs rows y-1..=y+1: the border rows are weak
+            // (NONE is NIBBLE_NONE in both nibbles).
             if y == 0 || y + 1 >= h {
                 out.fill(NONE);
                 continue;
             }
-            let rows3 = [y - 1, y, y + 1].map(|r| frame.row(r).unwrap_or(empty));
-            // Luma of column x in the three rows.
-            let column = |x: usize| rows3.map(|r| P::luma(r, x).map_or(0, i32::from));
-            // Slide a 3-column window along the row; at spacing 1 each step
-            // decodes one new column instead of nine pixels.
+            let (r0, r1, r2) = (frame.row(y - 1).unwrap_or(empty), frame.row(y).unwrap_or(empty), frame.row(y + 1).unwrap_or(empty));
+            // Luma of column x in the three rows (written out: an array
+            // `map` here is a call per column on a Cortex-M4).
+            let l = |r: &[u8], x: usize| P::luma(r, x).map_or(0, i32::from);
+            let column = |x: usize| [l(r0, x), l(r1, x), l(r2, x)];
+            // Slide a 3-column window along the row: cells one or two pixels
+            // apart (every pixel, or a checkerboard) share columns.
             let mut window: Option<(usize, [[i32; 3]; 3])> = None;
-            for (i, cell) in out.iter_mut().enumerate() {
-                let x = x0 + i * d;
-                *cell = if x == 0 || x + 1 >= w {
+            for i in 0..cols {
+                let x = x_first + i * dx;
+                let v = if x == 0 || x + 1 >= w {
                     NONE
                 } else {
                     let cols3 = match window {
                         Some((px, [_, m, r])) if px + 1 == x => [m, r, column(x + 1)],
+                        Some((px, [_, _, r])) if px + 2 == x => [r, column(x), column(x + 1)],
                         _ => [column(x - 1), column(x), column(x + 1)],
                     };
                     window = Some((x, cols3));
@@ -173,63 +238,113 @@ impl<const E: usize> EdgeMap<E> {
                     let (gx, gy) = sobel([a, b, c, dd, 0, f, g, hh, k]);
                     if gx * gx + gy * gy < t2 { weak } else { orientation_bin(gx, gy, bins) as u8 }
                 };
+                if nibbles {
+                    if let Some(byte) = out.get_mut(i >> 1) {
+                        let v = v.min(NIBBLE_NONE);
+                        *byte = if i & 1 == 0 { v } else { (*byte & 0x0f) | (v << 4) };
+                    }
+                } else if let Some(byte) = out.get_mut(i) {
+                    *byte = v;
+                }
             }
         }
     }
 
-    /// The bin of the map cell nearest pixel `(x, y)`: its orientation, or
-    /// the flat bin (`bins`) for a weak gradient when there is one; `None` for
-    /// a weak gradient without a flat bin, the frame border, or a pixel
-    /// outside the mapped region.
+    /// The bytes of the map row of the `j`-th lattice row, or none.
     #[inline(always)]
+    fn lattice_row(&self, j: usize) -> &[u8] {
+        let r = j.wrapping_sub(self.j0) >> self.shift;
+        if r < self.rows { self.bytes.get(r * self.stride..(r + 1) * self.stride).unwrap_or(&[]) } else { &[] }
+    }
+
+    /// The bin of the map cell of pixel `(x, y)` (the lattice point at or
+    /// before it): its orientation, or the flat bin (`bins`) for a weak
+    /// gradient when there is one; `None` for a weak gradient without a flat
+    /// bin, the frame border, or a pixel outside the mapped region.
     pub fn bin_at(&self, x: usize, y: usize) -> Option<usize> {
-        let i = x.checked_sub(self.x0)? >> self.shift;
-        let j = y.checked_sub(self.y0)? >> self.shift;
-        if i >= self.cols || j >= self.rows {
+        let l = &self.lattice;
+        let j = y / l.step();
+        let k = x.checked_sub(l.phase(j * l.step()))? / l.x_step();
+        let c = k.checked_sub(self.k0)? >> self.shift;
+        if c >= self.cols {
             return None;
         }
-        match self.cells.get(j * self.cols + i) {
-            Some(&v) if v != NONE => Some(v as usize),
-            _ => None,
+        match cell(self.lattice_row(j), c, self.nibbles) {
+            NONE => None,
+            v => Some(v as usize),
+        }
+    }
+
+    /// Whether cells take 4 bits.
+    pub(crate) fn nibbles(&self) -> bool {
+        self.nibbles
+    }
+}
+
+/// Cell `c` of a map row, [`NONE`] if it has no bin or is past the row.
+#[inline(always)]
+fn cell(bytes: &[u8], c: usize, nibbles: bool) -> u8 {
+    if nibbles {
+        match bytes.get(c >> 1).map(|b| (b >> ((c & 1) * 4)) & 0x0f) {
+            Some(v) if v != NIBBLE_NONE => v,
+            _ => NONE,
+        }
+    } else {
+        bytes.get(c).copied().unwrap_or(NONE)
+    }
+}
+
+/// The cells a row of samples reads, from [`EdgeMap::row_cells`].
+pub(crate) enum RowCells<'a> {
+    /// A map row of 4-bit cells at full lattice resolution: sample `i`
+    /// reads cell `first + i`.
+    Nibbles {
+        /// The map row.
+        bytes: &'a [u8],
+        /// The first sample's cell.
+        first: usize,
+    },
+    /// Sample `i` reads cell `(base + i) >> shift` (wrapping: cells left
+    /// of the map are huge indices, past the row).
+    General {
+        /// The map row.
+        bytes: &'a [u8],
+        /// The first sample's lattice column, relative to the map's first.
+        base: usize,
+        /// Lattice columns per cell, as a power of two.
+        shift: u32,
+        /// Whether cells take 4 bits.
+        nibbles: bool,
+    },
+}
+
+impl RowCells<'_> {
+    /// No map: every sample reads [`NONE`].
+    pub(crate) const EMPTY: RowCells<'static> = RowCells::General { bytes: &[], base: 0, shift: 0, nibbles: false };
+
+    /// The cell of sample `i`: its bin, or [`NONE`].
+    #[inline(always)]
+    pub(crate) fn get(&self, i: usize) -> u8 {
+        match *self {
+            RowCells::Nibbles { bytes, first } => cell(bytes, first.wrapping_add(i), true),
+            RowCells::General { bytes, base, shift, nibbles } => cell(bytes, base.wrapping_add(i) >> shift, nibbles),
         }
     }
 }
 
-/// Feeds a region walk's samples into an edge-orientation histogram (see
-/// [`crate::histogram::RowSink`]), looking each map row up once per pixel row.
-pub(crate) struct EdgeSink<'a, const E: usize, const B: usize> {
-    map: &'a EdgeMap<E>,
-    hist: &'a mut Histogram<B>,
-    /// The current row's cells: empty when the row is outside the map, or
-    /// when the sink is switched off.
-    cells: &'a [u8],
-    on: bool,
-}
-
-impl<'a, const E: usize, const B: usize> EdgeSink<'a, E, B> {
-    /// A sink into `hist` (which it clears), reading `map`; `on == false`
-    /// makes it take nothing, so one compiled loop serves both cases.
-    pub(crate) fn new(map: &'a EdgeMap<E>, hist: &'a mut Histogram<B>, on: bool) -> Self {
-        hist.clear();
-        EdgeSink { map, hist, cells: &[], on }
-    }
-}
-
-impl<const E: usize, const B: usize> RowSink for EdgeSink<'_, E, B> {
+impl<const E: usize> EdgeMap<E> {
+    /// The cells the samples of `span` read, in order. `span` must be a row
+    /// of a region walk on the map's lattice.
     #[inline(always)]
-    fn row(&mut self, y: usize) {
-        let m = self.map;
-        let j = y.wrapping_sub(m.y0) >> m.shift;
-        self.cells = if self.on && j < m.rows { m.cells.get(j * m.cols..(j + 1) * m.cols).unwrap_or(&[]) } else { &[] };
-    }
-
-    #[inline(always)]
-    fn pixel(&mut self, x: usize, w: u32) {
-        // Left of the map the subtraction wraps to a huge index: no cell.
-        if let Some(&v) = self.cells.get(x.wrapping_sub(self.map.x0) >> self.map.shift)
-            && v != NONE
-        {
-            self.hist.add(v as usize, w);
+    pub(crate) fn row_cells(&self, span: &RowSpan<'_>) -> RowCells<'_> {
+        let l = &self.lattice;
+        let bytes = self.lattice_row(div_small(span.y as u32, l.step() as u32) as usize);
+        let k = div_small(span.x.wrapping_sub(l.phase(span.y)) as u32, l.x_step() as u32) as usize;
+        let base = k.wrapping_sub(self.k0);
+        if self.nibbles && self.shift == 0 && base < self.cols {
+            RowCells::Nibbles { bytes, first: base }
+        } else {
+            RowCells::General { bytes, base, shift: self.shift, nibbles: self.nibbles }
         }
     }
 }
@@ -247,7 +362,8 @@ pub fn sobel(p: [i32; 9]) -> (i32, i32) {
 mod tests {
     use super::*;
     use crate::geometry::Ellipse;
-    use crate::region::{Lattice, Sampling, for_each_in_ellipse};
+    use crate::histogram::Histogram;
+    use crate::region::for_each_in_ellipse;
 
     #[test]
     fn sobel_on_a_hand_computed_patch() {
@@ -301,7 +417,7 @@ mod tests {
             let px = stripes(40, 40, vertical);
             let f = Frame::packed(&px, 40, 40, PixelFormat::Gray8).unwrap();
             let mut map = EdgeMap::<2048>::new();
-            map.compute(&f, (0, 0, 40, 40), EdgeParams { bins: 8, threshold: 50, min_spacing: 1, flat_bin: false });
+            map.compute(&f, (0, 0, 40, 40), EdgeParams { bins: 8, threshold: 50, sampling: Sampling::Full, step: 1, flat_bin: false });
             assert_eq!(map.spacing(), 1);
             let mut h = Histogram::<16>::new();
             let l = Lattice::new(Sampling::Full, 0, 10.0, 10.0);
@@ -316,9 +432,11 @@ mod tests {
     }
 
     #[test]
-    fn sliding_window_matches_direct_sobel_at_every_spacing() {
-        // Reason: cross-check the map (sliding window, one new column per
-        // step) against the plain per-pixel definition on a random image.
+    fn map_matches_direct_sobel_on_every_lattice() {
+        // Reason: cross-check the map (sliding window, shared columns,
+        // lattice-indexed cells) against the plain per-pixel definition on a
+        // random image, at every sampled pixel of several lattices, and
+        // against the region walk's own order of cells.
         let (w, h) = (37usize, 29usize);
         let mut seed = 99u32;
         let px: Vec<u8> = (0..w * h * 3)
@@ -329,36 +447,75 @@ mod tests {
             .collect();
         let f = Frame::packed(&px, w, h, PixelFormat::Rgb888).unwrap();
         let l = |x: usize, y: usize| crate::frame::luma(f.rgb(x, y).unwrap()) as i32;
-        for spacing in [1usize, 2, 4] {
-            let mut map = EdgeMap::<4096>::new();
-            let (x0, y0) = (3usize, 2usize);
-            map.compute(
-                &f,
-                (x0, y0, w, h),
-                EdgeParams { bins: 8, threshold: 120, min_spacing: spacing, flat_bin: false },
-            );
-            assert_eq!(map.spacing(), spacing);
-            for y in (y0..h).step_by(spacing) {
-                for x in (x0..w).step_by(spacing) {
-                    let want = if x == 0 || y == 0 || x + 1 >= w || y + 1 >= h {
-                        None
-                    } else {
-                        let win = [
-                            l(x - 1, y - 1),
-                            l(x, y - 1),
-                            l(x + 1, y - 1),
-                            l(x - 1, y),
-                            l(x, y),
-                            l(x + 1, y),
-                            l(x - 1, y + 1),
-                            l(x, y + 1),
-                            l(x + 1, y + 1),
-                        ];
-                        let (gx, gy) = sobel(win);
-                        (gx * gx + gy * gy >= 120 * 120).then(|| orientation_bin(gx, gy, 8))
-                    };
-                    assert_eq!(map.bin_at(x, y), want, "spacing {spacing} at ({x}, {y})");
+        let direct = |x: usize, y: usize, bins: usize| {
+            if x == 0 || y == 0 || x + 1 >= w || y + 1 >= h {
+                return None;
+            }
+            let win = [
+                l(x - 1, y - 1),
+                l(x, y - 1),
+                l(x + 1, y - 1),
+                l(x - 1, y),
+                l(x, y),
+                l(x + 1, y),
+                l(x - 1, y + 1),
+                l(x, y + 1),
+                l(x + 1, y + 1),
+            ];
+            let (gx, gy) = sobel(win);
+            (gx * gx + gy * gy >= 120 * 120).then(|| orientation_bin(gx, gy, bins))
+        };
+        // 8 bins take 4-bit cells, 16 a byte each.
+        for (sampling, step, bins) in [Sampling::Full, Sampling::Checkerboard, Sampling::Quarter]
+            .into_iter()
+            .flat_map(|s| [1usize, 2, 3].map(|step| (s, step)))
+            .flat_map(|(s, step)| [8usize, 16].map(|b| (s, step, b)))
+        {
+            {
+                let mut map = EdgeMap::<4096>::new();
+                let (x0, y0) = (3usize, 2usize);
+                let params = EdgeParams { bins, threshold: 120, sampling, step, flat_bin: false };
+                map.compute(&f, (x0, y0, w, h), params);
+                assert_eq!(map.spacing(), 1);
+                let lattice = Lattice::with_step(sampling, step);
+                let mut n = 0;
+                for y in y0..h {
+                    for x in x0..w {
+                        if lattice.contains(x, y) {
+                            assert_eq!(map.bin_at(x, y), direct(x, y, bins), "{sampling:?} step {step} at ({x}, {y})");
+                            n += 1;
+                        }
+                    }
                 }
+                assert!(n > 20, "{n} lattice pixels");
+                // A region walk reads the same cells along each row.
+                let e = Ellipse { cx: 20.0, cy: 15.0, hx: 12.0, hy: 9.0 };
+                let mut via_walk = Histogram::<17>::new();
+                let whole = crate::histogram::Layout::whole(crate::colour::Binning::Rgb8x8x8);
+                Histogram::<512>::new().compute_with(&f, &e, &whole, lattice, Some((&map, &mut via_walk)));
+                let mut via_lookup = Histogram::<17>::new();
+                for_each_in_ellipse(&f, &e, lattice, |_, x, y, w| {
+                    if let Some(b) = direct(x, y, bins) {
+                        via_lookup.add(b, w);
+                    }
+                });
+                assert!(via_lookup.total() > 0);
+                assert_eq!(via_walk, via_lookup, "{sampling:?} step {step}");
+                // A map too small for the region is coarsened; the walk then
+                // reads the cell `bin_at` names for each sample.
+                let mut small = EdgeMap::<16>::new();
+                small.compute(&f, (x0, y0, w, h), params);
+                assert!(small.spacing() > 1);
+                let mut via_walk = Histogram::<17>::new();
+                Histogram::<512>::new().compute_with(&f, &e, &whole, lattice, Some((&small, &mut via_walk)));
+                let mut via_lookup = Histogram::<17>::new();
+                for_each_in_ellipse(&f, &e, lattice, |_, x, y, w| {
+                    if let Some(b) = small.bin_at(x, y) {
+                        via_lookup.add(b, w);
+                    }
+                });
+                assert!(via_lookup.total() > 0);
+                assert_eq!(via_walk, via_lookup, "coarse: {sampling:?} step {step}");
             }
         }
     }
@@ -369,22 +526,26 @@ mod tests {
         let f = Frame::packed(&flat, 64, 64, PixelFormat::Gray8).unwrap();
         let mut map = EdgeMap::<256>::new();
         // 64x64 = 4096 pixels into 256 cells: spacing 4.
-        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 1, min_spacing: 1, flat_bin: false });
+        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 1, sampling: Sampling::Full, step: 1, flat_bin: false });
         assert_eq!(map.spacing(), 4);
         assert_eq!(map.bin_at(30, 30), None, "a flat frame has no edges");
         assert_eq!(map.bin_at(100, 30), None, "outside the frame");
         // Stripes 2 grey levels apart: a gradient of 8, under a threshold of 10.
         let faint: Vec<u8> = (0..64 * 64).map(|i| if (i % 64) / 4 % 2 == 0 { 100 } else { 102 }).collect();
         let f = Frame::packed(&faint, 64, 64, PixelFormat::Gray8).unwrap();
-        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 10, min_spacing: 1, flat_bin: false });
+        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 10, sampling: Sampling::Full, step: 1, flat_bin: false });
         assert!((0..64).all(|x| map.bin_at(x, 30).is_none()));
-        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 5, min_spacing: 3, flat_bin: false });
-        assert_eq!(map.spacing(), 4, "budget 256 cells still rules");
-        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 5, min_spacing: 1, flat_bin: false });
+        // Every 3rd row and column: 22x22 lattice points, 242 bytes of 4-bit
+        // cells: they fit. With 16 bins, a byte per cell: every 2nd of them.
+        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 5, sampling: Sampling::Full, step: 3, flat_bin: false });
+        assert_eq!(map.spacing(), 1);
+        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 16, threshold: 5, sampling: Sampling::Full, step: 3, flat_bin: false });
+        assert_eq!(map.spacing(), 2, "the budget of 256 bytes still rules");
+        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 5, sampling: Sampling::Full, step: 1, flat_bin: false });
         assert!((0..64).any(|x| map.bin_at(x, 30).is_some()));
         // With a flat bin, the weak pixels are counted there (bin 8 of 8 + 1).
         // The map's cells are 4 px apart; those of x < 4 sit on the border.
-        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 10, min_spacing: 1, flat_bin: true });
+        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 10, sampling: Sampling::Full, step: 1, flat_bin: true });
         assert!((4..64).all(|x| map.bin_at(x, 30) == Some(8)));
         assert_eq!(map.bin_at(0, 30), None, "the border has no Sobel window");
     }

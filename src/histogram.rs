@@ -10,10 +10,12 @@
 //! are `u32` sums, and the Bhattacharyya coefficient is an integer dot product
 //! of square roots, turned into a [`Real`] once per comparison.
 
-use crate::colour::{Binning, Quantise, Rgb8x8x8, levels_bin};
+use crate::colour::{Binning, levels_bin};
 use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
 use crate::geometry::Ellipse;
-use crate::region::{Lattice, Sampling, floor, for_each_row, quadrant};
+use crate::config::MAX_EDGE_BINS;
+use crate::edges::{EdgeMap, NIBBLE_NONE, RowCells};
+use crate::region::{Kernel, Lattice, RowSpan, Sampling, floor, for_each_row, quadrant};
 use crate::scalar::{Real, sqrt_q4};
 
 /// How the bins of a histogram are laid out: the colour binning, whether the
@@ -89,6 +91,15 @@ impl<const K: usize> Histogram<K> {
         }
     }
 
+    /// Adds `weight` to bin `bin` (if there is one) without touching the
+    /// total, for region walks that sum it once at the end.
+    #[inline(always)]
+    fn add_to_bin(&mut self, bin: usize, weight: u32) {
+        if let Some(c) = self.counts.get_mut(bin) {
+            *c = c.wrapping_add(weight);
+        }
+    }
+
     /// Removes `weight` from bin `bin` (undoing [`Histogram::add`]); bins past
     /// `K` are ignored.
     #[inline(always)]
@@ -121,21 +132,28 @@ impl<const K: usize> Histogram<K> {
 
     /// [`Histogram::compute`] on an explicit lattice.
     pub(crate) fn compute_on(&mut self, frame: &Frame<'_>, e: &Ellipse, binning: Binning, lattice: Lattice) {
-        self.compute_with(frame, e, &Layout::whole(binning), lattice, &mut ());
+        self.compute_with::<0>(frame, e, &Layout::whole(binning), lattice, None);
     }
 
-    /// [`Histogram::compute_on`], also feeding every sample to `sink`: other
-    /// cues ride on the same walk over the region instead of repeating it.
+    /// [`Histogram::compute_on`] with `layout`, also filling an edge
+    /// histogram from `edges`' map (which must be on `lattice`): both cues
+    /// ride on one walk over the region.
     #[inline(always)]
-    pub(crate) fn compute_with<S: RowSink>(
+    pub(crate) fn compute_with<const E: usize>(
         &mut self,
         frame: &Frame<'_>,
         e: &Ellipse,
         layout: &Layout,
         lattice: Lattice,
-        sink: &mut S,
+        edges: Option<(&EdgeMap<E>, &mut EdgeHistogram)>,
     ) {
         self.clear();
+        let mut unused = EdgeHistogram::new();
+        let (map, edge) = match edges {
+            Some((map, hist)) => (Some(map), hist),
+            None => (None, &mut unused),
+        };
+        edge.clear();
         // The default layout gets a loop compiled per pixel format; the
         // others (HSV, coarser or adaptive RGB, quadrants), slower per pixel
         // anyway, share one loop that reads pixels through the general
@@ -143,65 +161,179 @@ impl<const K: usize> Histogram<K> {
         // a small target can spare (measured: +6 KB on Cortex-M4 per loop).
         if layout.is_fast() {
             match frame.format() {
-                PixelFormat::Rgb565 => self.accumulate::<Rgb565, Rgb8x8x8, S>(frame, e, lattice, sink),
-                PixelFormat::Rgb888 => self.accumulate::<Rgb888, Rgb8x8x8, S>(frame, e, lattice, sink),
-                PixelFormat::Yuv422 => self.accumulate::<Yuv422, Rgb8x8x8, S>(frame, e, lattice, sink),
-                PixelFormat::Gray8 => self.accumulate::<Gray8, Rgb8x8x8, S>(frame, e, lattice, sink),
+                PixelFormat::Rgb565 => self.accumulate::<Rgb565, E>(frame, e, lattice, map, edge),
+                PixelFormat::Rgb888 => self.accumulate::<Rgb888, E>(frame, e, lattice, map, edge),
+                PixelFormat::Yuv422 => self.accumulate::<Yuv422, E>(frame, e, lattice, map, edge),
+                PixelFormat::Gray8 => self.accumulate::<Gray8, E>(frame, e, lattice, map, edge),
             }
-            return;
-        }
-        let (counts, mut total) = (&mut self.counts, 0u32);
-        let quads = cfg!(feature = "quadrants") && layout.segments == 4;
-        let seg = K / layout.segments.max(1) as usize;
-        let centre = (floor(e.cx), floor(e.cy));
-        let (binning, levels) = (layout.binning, layout.levels);
-        for_each_row(frame, e, lattice, |span| {
-            let y = span.y;
-            sink.row(y);
-            for (x, w) in span {
-                sink.pixel(x, w);
-                let q = if quads { quadrant(x, y, centre) } else { 0 };
-                if let Some(rgb) = frame.rgb(x, y) {
-                    let b = match binning {
-                        Binning::Adaptive => levels_bin(rgb, levels.get(q).copied().unwrap_or(2)),
-                        other => other.bin(rgb),
-                    };
-                    if let Some(c) = counts.get_mut(q * seg + b) {
-                        *c = c.wrapping_add(w);
-                        total = total.wrapping_add(w);
+        } else {
+            let (counts, mut total) = (&mut self.counts, 0u32);
+            let quads = cfg!(feature = "quadrants") && layout.segments == 4;
+            let seg = K / layout.segments.max(1) as usize;
+            let centre = (floor(e.cx), floor(e.cy));
+            let (binning, levels) = (layout.binning, layout.levels);
+            for_each_row(frame, e, lattice, |span| {
+                let y = span.y;
+                let cells = row_cells(map, &span);
+                for (i, (x, w)) in span.enumerate() {
+                    edge.add_to_bin(cells.get(i) as usize, w);
+                    let q = if quads { quadrant(x, y, centre) } else { 0 };
+                    if let Some(rgb) = frame.rgb(x, y) {
+                        let b = match binning {
+                            Binning::Adaptive => levels_bin(rgb, levels.get(q).copied().unwrap_or(2)),
+                            other => other.bin(rgb),
+                        };
+                        if let Some(c) = counts.get_mut(q * seg + b) {
+                            *c = c.wrapping_add(w);
+                            total = total.wrapping_add(w);
+                        }
                     }
                 }
-            }
-        });
-        self.total = total;
+            });
+            self.total = total;
+        }
+        // The paired loop drops the weight of cells with no bin into the
+        // nibble form's "none" bin, which no orientation uses (see `take`).
+        if map.is_some_and(|m| m.nibbles())
+            && let Some(c) = edge.counts.get_mut(NIBBLE_NONE as usize)
+        {
+            *c = 0;
+        }
+        edge.recount();
     }
 
     #[inline(always)]
-    fn accumulate<P: PixelRead, Q: Quantise, S: RowSink>(
+    fn accumulate<P: PixelRead, const E: usize>(
         &mut self,
         frame: &Frame<'_>,
         e: &Ellipse,
         lattice: Lattice,
-        sink: &mut S,
+        map: Option<&EdgeMap<E>>,
+        edge: &mut EdgeHistogram,
     ) {
-        let (counts, mut total) = (&mut self.counts, 0u32);
+        let (counts, edge, mut total) = (&mut self.counts, &mut edge.counts, 0u32);
         for_each_row(frame, e, lattice, |span| {
-            sink.row(span.y);
-            let row = span.row;
-            for (x, w) in span {
-                sink.pixel(x, w);
-                if let Some(bin) = Q::bin::<P>(row, x)
-                    && let Some(c) = counts.get_mut(bin)
-                {
-                    // Sums stay below 2^32 for any frame within MAX_DIMENSION;
-                    // wrapping keeps the loop free of a panic path regardless.
-                    *c = c.wrapping_add(w);
-                    total = total.wrapping_add(w);
-                }
-            }
+            let cells = row_cells(map, &span);
+            // The usual case (a checkerboard, a map of 4-bit cells at full
+            // lattice resolution, pixels whole in their bytes) has a loop
+            // with no bounds test per sample; the rest share an indexed one.
+            let paired = match cells {
+                RowCells::Nibbles { bytes, first } => paired_row::<P, K>(&span, bytes, first, counts, edge),
+                RowCells::General { .. } => None,
+            };
+            let row_total = paired.unwrap_or_else(|| indexed_row::<P, K>(&span, &cells, counts, edge));
+            total = total.wrapping_add(row_total);
         });
         self.total = total;
     }
+
+    /// Sums the counts into the total (after [`Histogram::add_to_bin`]).
+    fn recount(&mut self) {
+        self.total = self.counts.iter().fold(0u32, |a, &c| a.wrapping_add(c));
+    }
+}
+
+/// An edge-orientation histogram: up to 16 orientation bins and a flat one.
+pub(crate) type EdgeHistogram = Histogram<MAX_EDGE_BINS>;
+
+/// The edge cells of `span`'s samples in `map`, or none.
+#[inline(always)]
+fn row_cells<'m, const E: usize>(map: Option<&'m EdgeMap<E>>, span: &RowSpan<'_>) -> RowCells<'m> {
+    map.map_or(RowCells::EMPTY, |m| m.row_cells(span))
+}
+
+/// One sample: its colour bin `bin` and edge cell `cell` take weight `w`.
+/// Returns the colour mass added. A cell with no bin is [`NONE`], past the
+/// histogram, or in 4-bit maps [`NIBBLE_NONE`], a bin no orientation uses
+/// (4-bit maps have at most 8 orientations and the flat bin), emptied after
+/// the walk: no branch per sample.
+#[inline(always)]
+fn take<const K: usize>(bin: usize, cell: u8, w: u32, counts: &mut [u32; K], edge: &mut [u32; MAX_EDGE_BINS]) -> u32 {
+    // Weak cells (NONE) are past the histogram: no bin.
+    if let Some(c) = edge.get_mut(cell as usize) {
+        *c = c.wrapping_add(w);
+    }
+    match counts.get_mut(bin) {
+        // Sums stay below 2^32 for any frame within MAX_DIMENSION;
+        // wrapping keeps the loop free of a panic path regardless.
+        Some(c) => {
+            *c = c.wrapping_add(w);
+            w
+        }
+        None => 0,
+    }
+}
+
+/// The per-pixel loop of a checkerboard row (samples two pixels apart)
+/// whose samples read consecutive 4-bit cells from cell `first` of
+/// `bytes`: two samples per cell byte and per four-pixel chunk, zipped, so
+/// nothing is bounds-tested per sample; the odd sample at either end goes
+/// alone. `None` (before any work) if the row is not such a row. Returns
+/// the row's colour mass.
+#[inline(always)]
+fn paired_row<P: PixelRead, const K: usize>(
+    span: &RowSpan<'_>,
+    bytes: &[u8],
+    first: usize,
+    counts: &mut [u32; K],
+    edge: &mut [u32; MAX_EDGE_BINS],
+) -> Option<u32> {
+    if span.dx != 2 {
+        return None;
+    }
+    let px = P::pixels(span.row)?;
+    let n = span.n;
+    // A sample on an odd cell goes first, alone; then pairs as long as
+    // their four-pixel chunks are on the row; the rest alone.
+    let head = (first & 1).min(n);
+    let start = span.x.checked_add(2 * head)?;
+    let pairs = ((n - head) / 2).min(px.len().saturating_sub(start) / 4);
+    let quads = px.get(start..start + 4 * pairs)?.as_chunks::<4>().0;
+    let b0 = (first + head) >> 1;
+    let pair_bytes = bytes.get(b0..b0 + pairs)?;
+    let mut kernel = span.kernel;
+    let mut total = 0u32;
+    let mut alone = |i: usize, kernel: &mut Kernel, counts: &mut [u32; K], edge: &mut [u32; MAX_EDGE_BINS]| {
+        let w = kernel.next_weight();
+        if let Some(&p) = px.get(span.x + 2 * i) {
+            let cell = bytes.get((first + i) >> 1).map_or(NIBBLE_NONE, |b| (b >> (((first + i) & 1) * 4)) & 0x0f);
+            total = total.wrapping_add(take(P::px_8x8x8(p), cell, w, counts, edge));
+        }
+    };
+    if head == 1 {
+        alone(0, &mut kernel, counts, edge);
+    }
+    let mut pair_total = 0u32;
+    for (q, &b) in quads.iter().zip(pair_bytes) {
+        let [p0, _, p1, _] = *q;
+        pair_total = pair_total.wrapping_add(take(P::px_8x8x8(p0), b & 0x0f, kernel.next_weight(), counts, edge));
+        pair_total = pair_total.wrapping_add(take(P::px_8x8x8(p1), b >> 4, kernel.next_weight(), counts, edge));
+    }
+    for i in head + 2 * pairs..n {
+        alone(i, &mut kernel, counts, edge);
+    }
+    Some(total.wrapping_add(pair_total))
+}
+
+/// The per-pixel loop of any row: sample `i` reads `cells.get(i)` and its
+/// pixel through a bounds-tested read. Returns the row's colour mass.
+#[inline(always)]
+fn indexed_row<P: PixelRead, const K: usize>(
+    span: &RowSpan<'_>,
+    cells: &RowCells<'_>,
+    counts: &mut [u32; K],
+    edge: &mut [u32; MAX_EDGE_BINS],
+) -> u32 {
+    let (row, mut x, dx, mut kernel) = (span.row, span.x, span.dx, span.kernel);
+    let mut total = 0u32;
+    for i in 0..span.n {
+        let w = kernel.next_weight();
+        if let Some(bin) = P::rgb_8x8x8(row, x) {
+            total = total.wrapping_add(take(bin, cells.get(i), w, counts, edge));
+        }
+        x += dx;
+    }
+    total
 }
 
 /// Calls `visit(x, y, bin)` for every sample of ellipse `e` on `lattice`:
@@ -221,7 +353,7 @@ pub(crate) fn for_each_bin<F: FnMut(usize, usize, usize)>(
         let (y, row) = (span.y, span.row);
         if packed {
             for (x, _) in span {
-                if let Some(bin) = Rgb8x8x8::bin::<Rgb565>(row, x) {
+                if let Some(bin) = Rgb565::rgb_8x8x8(row, x) {
                     visit(x, y, bin);
                 }
             }
@@ -233,24 +365,6 @@ pub(crate) fn for_each_bin<F: FnMut(usize, usize, usize)>(
             }
         }
     });
-}
-
-/// Something that takes every sample of a region walk, row by row, beside the
-/// colour histogram (the edge cue). `row` comes before each row's pixels, so
-/// per-row work is done once per row.
-pub(crate) trait RowSink {
-    /// Row `y` starts.
-    fn row(&mut self, y: usize);
-    /// Pixel `x` of the current row, with kernel weight `w`.
-    fn pixel(&mut self, x: usize, w: u32);
-}
-
-/// Nothing rides along.
-impl RowSink for () {
-    #[inline(always)]
-    fn row(&mut self, _: usize) {}
-    #[inline(always)]
-    fn pixel(&mut self, _: usize, _: u32) {}
 }
 
 /// How a histogram is compared with the model.

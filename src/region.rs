@@ -40,54 +40,70 @@ pub(crate) struct Lattice {
 }
 
 impl Lattice {
+    /// Every pixel.
+    pub(crate) const FULL: Lattice = Lattice { step: 1, checker: false };
+
     /// The lattice for `sampling`, coarsened if needed so that an ellipse with
     /// half axes `hx`, `hy` yields at most about `max_samples` samples
     /// (`0` means no limit).
     pub(crate) fn new(sampling: Sampling, max_samples: u32, hx: Real, hy: Real) -> Self {
-        let (step, checker) = match sampling {
-            Sampling::Full => (1u32, false),
-            Sampling::Checkerboard => (1, true),
-            Sampling::Quarter => (2, false),
-        };
-        let mut l = Lattice { step, checker };
+        let mut l = Self::with_step(sampling, 1);
         if max_samples == 0 {
             return l;
         }
         // Expected samples: area · density, density = 1/step² (halved by the checker).
         let area = core::f32::consts::PI * hx.max(0.5) * hy.max(0.5);
-        let density = if checker { 0.5 } else { 1.0 };
+        let density = if l.checker { 0.5 } else { 1.0 };
         let want = area * density / max_samples as Real;
-        if want > (step * step) as Real {
+        if want > (l.step * l.step) as Real {
             // Smallest step with area·density/step² <= max_samples.
             let s = crate::scalar::sqrt(want);
             let mut s_int = s as u32;
             if (s_int as Real) < s {
                 s_int += 1;
             }
-            l.step = s_int.max(step).min(MAX_DIMENSION as u32);
+            l.step = s_int.max(l.step).min(MAX_DIMENSION as u32);
         }
         l
     }
 
+    /// The lattice of `sampling` with at least `step` rows and columns
+    /// between samples (`Quarter` is at least 2; at most `MAX_DIMENSION`).
+    pub(crate) fn with_step(sampling: Sampling, step: usize) -> Self {
+        let (base, checker) = match sampling {
+            Sampling::Full => (1u32, false),
+            Sampling::Checkerboard => (1, true),
+            Sampling::Quarter => (2, false),
+        };
+        Lattice { step: (step.min(MAX_DIMENSION) as u32).max(base), checker }
+    }
+
     /// Rows and columns between samples.
     pub(crate) fn step(&self) -> usize {
-        self.step as usize
+        // At least 1 by construction; said here so divisions need no check.
+        self.step.max(1) as usize
+    }
+
+    /// Pixels between consecutive samples of a row.
+    pub(crate) fn x_step(&self) -> usize {
+        let s = self.step() as u32;
+        // At least 1, said so that divisions need no check.
+        (if self.checker { 2 * s } else { s }).max(1) as usize
+    }
+
+    /// The first sampled column of row `y` (on a checkerboard, odd cell rows
+    /// start one cell in).
+    pub(crate) fn phase(&self, y: usize) -> usize {
+        let s = self.step.max(1) as usize;
+        if self.checker && div_small(y as u32, s as u32) % 2 == 1 { s } else { 0 }
     }
 
     /// Whether pixel `(x, y)` is on the lattice: the same pixels
     /// [`for_each_row`] visits (rows at multiples of the step; on a
     /// checkerboard, odd cell rows shifted by one cell).
     pub(crate) fn contains(&self, x: usize, y: usize) -> bool {
-        let s = self.step.max(1) as usize;
-        if !y.is_multiple_of(s) {
-            return false;
-        }
-        if self.checker {
-            let phase = ((y / s) % 2) * s;
-            x >= phase && (x - phase).is_multiple_of(2 * s)
-        } else {
-            x.is_multiple_of(s)
-        }
+        let phase = self.phase(y);
+        y.is_multiple_of(self.step.max(1) as usize) && x >= phase && (x - phase).is_multiple_of(self.x_step())
     }
 }
 
@@ -191,29 +207,60 @@ pub(crate) fn floor(v: Real) -> i32 {
 
 /// The smallest `v >= from` with `v ≡ phase (mod modulus)`, for `from >= 0`.
 #[inline(always)]
-fn align_up(from: i32, modulus: i32, phase: i32) -> i32 {
+fn align_up(from: i32, modulus: usize, phase: usize) -> i32 {
+    let m = (modulus as u32).max(1);
     // Moduli 1 and 2 (every pixel, checkerboard, quarter) are the common
     // case: no division for them, which a Cortex-M0+ does in software.
-    match modulus {
+    match m {
         1 => from,
-        2 => from + ((phase - from) & 1),
-        _ => from + (phase - from).rem_euclid(modulus),
+        2 => from + ((phase as i32 - from) & 1),
+        _ => {
+            let (f, p) = (from.max(0) as u32, phase as u32 % m);
+            from + ((p + m - f % m) % m) as i32
+        }
     }
 }
 
-/// The sampled pixels of one row of an ellipse: an iterator over
-/// `(x, kernel weight)`, plus the row's index and pixel bytes.
+/// The kernel weights along one row of samples, by finite differences: the
+/// weight numerator `t = one − r²` is a quadratic in the sample index, so
+/// each sample costs two additions instead of a multiply and a range test.
+/// Arithmetic wraps: every `t` that is read lies in `2^16..=2^24`, so the
+/// wrapped values are the exact ones (only the differences past the last
+/// sample, never read, may overflow).
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct Kernel {
+    t: i32,
+    d: i32,
+    dd: i32,
+}
+
+impl Kernel {
+    /// The weight of the current sample (at least 1), then moves to the next.
+    #[inline(always)]
+    pub(crate) fn next_weight(&mut self) -> u32 {
+        let w = (self.t >> (RADIUS2_SHIFT - KERNEL_ONE.trailing_zeros())) as u32;
+        self.t = self.t.wrapping_add(self.d);
+        self.d = self.d.wrapping_add(self.dd);
+        w
+    }
+}
+
+/// The sampled pixels of one row of an ellipse: `n` samples from pixel `x`,
+/// `dx` pixels apart, every one with a kernel weight of at least 1. Also an
+/// iterator over `(x, weight)` for the callers that are not per-pixel hot.
 pub(crate) struct RowSpan<'a> {
     /// Row index.
     pub y: usize,
     /// The row's pixel bytes.
     pub row: &'a [u8],
-    x: i32,
-    x_hi: i32,
-    step: i32,
-    cx: i32,
-    ax: u32,
-    ry2: u32,
+    /// The first sampled pixel.
+    pub x: usize,
+    /// Number of samples.
+    pub n: usize,
+    /// Pixels between samples.
+    pub dx: usize,
+    /// Weights of the samples, from the first.
+    pub kernel: Kernel,
 }
 
 impl Iterator for RowSpan<'_> {
@@ -221,37 +268,32 @@ impl Iterator for RowSpan<'_> {
 
     #[inline(always)]
     fn next(&mut self) -> Option<(usize, u32)> {
-        let one = 1u32 << RADIUS2_SHIFT;
-        let w_shift = RADIUS2_SHIFT - KERNEL_ONE.trailing_zeros();
-        while self.x <= self.x_hi {
-            let x = self.x;
-            self.x += self.step;
-            let dx = x.abs_diff(self.cx);
-            // dx <= dx_max, so dx²·ax <= one − ry2 < 2^24: no overflow.
-            let r2 = self.ry2 + dx * dx * self.ax;
-            if r2 < one {
-                let w = (one - r2) >> w_shift;
-                if w > 0 {
-                    return Some((x as usize, w));
-                }
-            }
+        if self.n == 0 {
+            return None;
         }
-        None
+        let x = self.x;
+        self.n -= 1;
+        self.x += self.dx;
+        Some((x, self.kernel.next_weight()))
     }
 }
 
 /// Calls `visit` with each row of pixels of `frame` on `lattice` inside
-/// ellipse `e`; each [`RowSpan`] yields the row's sampled pixels with their
-/// kernel weights in `1..=KERNEL_ONE`. Pixels outside the frame are skipped,
-/// so a region partly off-frame is the part that is on it. Row by row, so
-/// that callers can hoist per-row work out of the per-pixel loop.
+/// ellipse `e` whose kernel weight is at least 1 (`k(r) = 1 − r²` in
+/// `1..=KERNEL_ONE`). Pixels outside the frame are skipped, so a region
+/// partly off-frame is the part that is on it. Row by row, so that callers
+/// can hoist per-row work out of the per-pixel loop.
 #[inline(always)]
 pub(crate) fn for_each_row<F: FnMut(RowSpan<'_>)>(frame: &Frame<'_>, e: &Ellipse, lattice: Lattice, mut visit: F) {
     let Some(r) = Raster::new(e) else { return };
     let one = 1u32 << RADIUS2_SHIFT;
+    // A pixel counts when its weight (one − r²) >> 16 is non-zero: r² may
+    // be at most `one − min_gap`.
+    let min_gap = 1u32 << (RADIUS2_SHIFT - KERNEL_ONE.trailing_zeros());
     let (width, height) = (frame.width() as i32, frame.height() as i32);
     let s = lattice.step as i32;
-    let y_lo = align_up((r.cy - r.ry).max(0), s, 0);
+    let dx = lattice.x_step() as i32;
+    let y_lo = align_up((r.cy - r.ry).max(0), s as usize, 0);
     let y_hi = (r.cy + r.ry).min(height - 1);
     let mut y = y_lo;
     // The widest |dx| of the previous row: a row's width differs little from
@@ -259,12 +301,12 @@ pub(crate) fn for_each_row<F: FnMut(RowSpan<'_>)>(frame: &Frame<'_>, e: &Ellipse
     let mut dx_max: u32 = 0;
     while y <= y_hi {
         let dy = y.abs_diff(r.cy);
-        if let Some(ry2) = dy.checked_mul(dy).and_then(|d| d.checked_mul(r.ay)).filter(|&v| v < one)
+        if let Some(ry2) = dy.checked_mul(dy).and_then(|d| d.checked_mul(r.ay))
+            && let Some(rem) = one.checked_sub(min_gap).and_then(|m| m.checked_sub(ry2))
             && let Some(row) = frame.row(y as usize)
         {
-            let rem = u64::from(one - ry2);
             // Widest |dx| with dx²·ax <= rem (the same as isqrt(rem / ax)).
-            let ax = u64::from(r.ax);
+            let (rem, ax) = (u64::from(rem), u64::from(r.ax));
             let fits = |d: u32| u64::from(d) * u64::from(d) * ax <= rem;
             while !fits(dx_max) && dx_max > 0 {
                 dx_max -= 1;
@@ -272,18 +314,40 @@ pub(crate) fn for_each_row<F: FnMut(RowSpan<'_>)>(frame: &Frame<'_>, e: &Ellipse
             while fits(dx_max + 1) {
                 dx_max += 1;
             }
-            let dx_max = dx_max as i32;
-            let x_lo = (r.cx - dx_max).max(0);
-            let x_hi = (r.cx + dx_max).min(width - 1);
-            // On a checkerboard of s-sized cells, odd cell rows start one cell in.
-            let (x, step) = if lattice.checker {
-                (align_up(x_lo, 2 * s, ((y / s) % 2) * s), 2 * s)
-            } else {
-                (align_up(x_lo, s, 0), s)
-            };
-            visit(RowSpan { y: y as usize, row, x, x_hi, step, cx: r.cx, ax: r.ax, ry2 });
+            let half = dx_max as i32;
+            let x_lo = (r.cx - half).max(0);
+            let x_hi = (r.cx + half).min(width - 1);
+            let first = align_up(x_lo, dx as usize, lattice.phase(y as usize));
+            if first <= x_hi {
+                let n = div_small((x_hi - first) as u32, dx as u32) as usize + 1;
+                // t(x) = one − ry2 − ax·(x − cx)², and its first and second
+                // differences for steps of dx (wrapping: see Kernel).
+                let (ax, u, dx) = (r.ax as i32, first - r.cx, dx);
+                let t = ((one - ry2) as i32).wrapping_sub(ax.wrapping_mul(u).wrapping_mul(u));
+                let d = ax.wrapping_mul(dx).wrapping_mul(u.wrapping_mul(2).wrapping_add(dx)).wrapping_neg();
+                let dd = ax.wrapping_mul(dx).wrapping_mul(dx).wrapping_mul(-2);
+                visit(RowSpan {
+                    y: y as usize,
+                    row,
+                    x: first as usize,
+                    n,
+                    dx: dx as usize,
+                    kernel: Kernel { t, d, dd },
+                });
+            }
         }
         y += s;
+    }
+}
+
+/// `a / b` for `b >= 1`, with no division for the common steps 1 and 2
+/// (a Cortex-M0+ divides in software).
+#[inline(always)]
+pub(crate) fn div_small(a: u32, b: u32) -> u32 {
+    match b {
+        0 | 1 => a,
+        2 => a >> 1,
+        _ => a / b,
     }
 }
 

@@ -2,7 +2,7 @@
 //! model and explicit searching / tracking / lost states.
 
 use crate::config::{Config, MAX_EDGE_BINS, ModelUpdate, TableMode};
-use crate::edges::{EdgeMap, EdgeParams, EdgeSink};
+use crate::edges::EdgeMap;
 use crate::error::{ConfigError, Error, ParamProblem, RegionError};
 use crate::filter::{Bounds, Particle, mean_state, resample};
 use crate::frame::Frame;
@@ -248,28 +248,33 @@ struct Seen {
 }
 
 /// Working memory for observing regions: the histograms of the last region
-/// observed, and this frame's edge map.
+/// observed, this frame's sampling lattice and its edge map.
 #[derive(Clone, Debug)]
 struct Scratch<const K: usize, const E: usize> {
     colour: Histogram<K>,
     edge: Histogram<MAX_EDGE_BINS>,
     map: EdgeMap<E>,
+    /// The lattice every region of this frame is read on (the edge map's).
+    lattice: Lattice,
 }
 
 impl<const K: usize, const E: usize> Scratch<K, E> {
     /// Histograms of ellipse `e`, left in `self` (for a model update).
-    fn observe(&mut self, cfg: &Config, frame: &Frame<'_>, e: &Ellipse, layout: &Layout, edges: bool) {
-        let lattice = Lattice::new(cfg.sampling, cfg.max_samples, e.hx, e.hy);
-        // One walk over the region feeds both cues. One sink type, switched
-        // by a flag, keeps one compiled loop per pixel format instead of two
-        // (flash is scarce on the targets).
-        let Scratch { colour, edge, map } = self;
-        colour.compute_with(frame, e, layout, lattice, &mut EdgeSink::new(map, edge, edges));
+    fn observe(&mut self, frame: &Frame<'_>, e: &Ellipse, layout: &Layout, edges: bool) {
+        // One walk over the region feeds both cues.
+        let Scratch { colour, edge, map, lattice } = self;
+        let edges = if edges {
+            Some((&*map, edge))
+        } else {
+            edge.clear();
+            None
+        };
+        colour.compute_with(frame, e, layout, *lattice, edges);
     }
 
     /// How ellipse `e` compares with `models`; all similarities in `[0, 1]`.
     fn similarity(&mut self, cfg: &Config, frame: &Frame<'_>, models: &Models<K>, e: &Ellipse) -> Seen {
-        self.observe(cfg, frame, e, &models.layout, models.edge.is_some());
+        self.observe(frame, e, &models.layout, models.edge.is_some());
         let per = models.colour.compare(&self.colour, cfg.similarity);
         let (rho, quads) =
             if cfg!(feature = "quadrants") && cfg.quadrants { (median4(per), per) } else { (per[0], [0.0; 4]) };
@@ -283,22 +288,20 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
         Seen { rho, sim, quads }
     }
 
-    /// Computes the edge map over the pixel rectangle `[x0, x1) × [y0, y1)`,
-    /// as finely as regions with half axes `half_axes` are sampled.
-    fn map_edges(
+    /// Chooses the lattice of regions with half axes `half_axes` (the
+    /// target's: one lattice for every region of a frame, so that their
+    /// samples share the edge map's cells) and computes the edge map over
+    /// the pixel rectangle `[x0, x1) × [y0, y1)` if there is one.
+    fn prepare(
         &mut self,
         cfg: &Config,
         frame: &Frame<'_>,
-        rect: (usize, usize, usize, usize),
+        rect: Option<(usize, usize, usize, usize)>,
         half_axes: (Real, Real),
     ) {
-        if let Some(e) = cfg.edges {
-            let min_spacing = Lattice::new(cfg.sampling, cfg.max_samples, half_axes.0, half_axes.1).step();
-            self.map.compute(
-                frame,
-                rect,
-                EdgeParams { bins: e.bins as usize, threshold: e.threshold, min_spacing, flat_bin: e.flat_bin },
-            );
+        self.lattice = Lattice::new(cfg.sampling, cfg.max_samples, half_axes.0, half_axes.1);
+        if let (Some(e), Some(rect)) = (cfg.edges, rect) {
+            self.map.compute_on(frame, rect, e.bins as usize, e.threshold, e.flat_bin, self.lattice);
         }
     }
 }
@@ -427,7 +430,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             particles: [Particle::default(); N],
             copies: [0; N],
             weights: [1.0 / N as Real; N],
-            scratch: Scratch { colour: Histogram::new(), edge: Histogram::new(), map: EdgeMap::new() },
+            scratch: Scratch { colour: Histogram::new(), edge: Histogram::new(), map: EdgeMap::new(), lattice: Lattice::FULL },
             table: Table::new(),
             target: None,
             state: TrackState::Searching,
@@ -522,13 +525,12 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         let segments = if cfg!(feature = "quadrants") && cfg.quadrants { 4 } else { 1 };
         #[cfg_attr(not(feature = "adaptive-bins"), allow(unused_mut))]
         let mut layout = Layout { segments, ..Layout::whole(cfg.binning) };
+        sc.prepare(cfg, frame, Some(cover(&e, fw, fh)), (e.hx, e.hy));
         #[cfg(feature = "adaptive-bins")]
         if cfg.binning == crate::colour::Binning::Adaptive {
-            let lattice = Lattice::new(cfg.sampling, cfg.max_samples, e.hx, e.hy);
-            layout.levels = crate::bins::choose_levels(&mut sc.colour, frame, &e, lattice, segments);
+            layout.levels = crate::bins::choose_levels(&mut sc.colour, frame, &e, sc.lattice, segments);
         }
-        sc.map_edges(cfg, frame, cover(&e, fw, fh), (e.hx, e.hy));
-        sc.observe(cfg, frame, &e, &layout, cfg.edges.is_some());
+        sc.observe(frame, &e, &layout, cfg.edges.is_some());
         let colour = Model::from_segments(&sc.colour, segments).ok_or(RegionError::NoPixels)?;
         let edge = if cfg.edges.is_some() { Model::from_histogram(&sc.edge) } else { None };
         let models = Models { layout, colour, edge };
@@ -536,7 +538,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         // Background similarity on a grid of target-sized regions that do not
         // touch the target: at most 8x8 of them, spaced at least one target
         // size apart.
-        sc.map_edges(cfg, frame, (0, 0, fw, fh), (e.hx, e.hy));
+        sc.prepare(cfg, frame, Some((0, 0, fw, fh)), (e.hx, e.hy));
         let (fw, fh) = (fw as Real, fh as Real);
         let step_x = bbox.width.max(fw / 8.0);
         let step_y = bbox.height.max(fh / 8.0);
@@ -632,14 +634,15 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         }
 
         // 3. Observe. Edges first, once, over the region the particles cover.
-        if target.models.edge.is_some() {
+        let rect = target.models.edge.is_some().then(|| {
             let (mut x0, mut y0, mut x1, mut y1) = (size.0, size.1, 0, 0);
             for p in self.particles.iter() {
                 let (a, b, c, d) = cover(&p.ellipse(), size.0, size.1);
                 (x0, y0, x1, y1) = (x0.min(a), y0.min(b), x1.max(c), y1.max(d));
             }
-            self.scratch.map_edges(cfg, frame, (x0, y0, x1, y1), target.half_axes);
-        }
+            (x0, y0, x1, y1)
+        });
+        self.scratch.prepare(cfg, frame, rect, target.half_axes);
         // Similarity per particle, kept in `weights` until σ is known. The
         // boundary scores wait in `copies`, free until the next resampling
         // (in 1/16 Sobel units; at most 1443 · 16 < 2^16), until the best
@@ -794,7 +797,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             binning: cfg.binning,
             levels: target.models.layout.levels[0],
             map,
-            lattice: Lattice::new(cfg.sampling, cfg.max_samples, hx, hy),
+            lattice: self.scratch.lattice,
         };
         let (mut x0, mut y0, mut x1, mut y1) = (i32::MAX, i32::MAX, i32::MIN, i32::MIN);
         for p in self.particles.iter() {
