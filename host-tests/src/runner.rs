@@ -6,10 +6,11 @@ use std::time::Instant;
 /// Particle count of the host harness (the papers' 100).
 pub const PARTICLES: usize = 100;
 
-/// Edge-map cells of the harness's tracker: enough for the particles of a
-/// 100x130-pixel target at full resolution (firmware uses fewer and gets a
-/// coarser map on large targets; see `pftrack::EdgeMap`).
-pub const EDGE_CELLS: usize = 16384;
+/// Edge-map bytes of the harness's tracker: the core's default, as on the
+/// firmware, so that the accuracy measured here is what a board gets (4-bit
+/// cells: 8192 lattice points, which the real sequences' particles fit at
+/// full resolution; see `pftrack::EdgeMap`).
+pub const EDGE_CELLS: usize = 4096;
 
 /// Likelihood-table cells of the harness's tracker (table mode): a 128x128
 /// grid of candidate positions at the finest spacing.
