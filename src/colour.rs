@@ -1,6 +1,5 @@
 //! Colour quantisation: how a pixel's colour maps to a histogram bin.
 
-
 /// How a colour maps to a histogram bin. A component of the configuration;
 /// a histogram's capacity `K` must be at least [`Binning::bins`].
 #[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, Default)]

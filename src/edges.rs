@@ -215,7 +215,8 @@ impl<const E: usize> EdgeMap<E> {
                 out.fill(NONE);
                 continue;
             }
-            let (r0, r1, r2) = (frame.row(y - 1).unwrap_or(empty), frame.row(y).unwrap_or(empty), frame.row(y + 1).unwrap_or(empty));
+            let (r0, r1, r2) =
+                (frame.row(y - 1).unwrap_or(empty), frame.row(y).unwrap_or(empty), frame.row(y + 1).unwrap_or(empty));
             // Luma of column x in the three rows (written out: an array
             // `map` here is a call per column on a Cortex-M4).
             let l = |r: &[u8], x: usize| P::luma(r, x).map_or(0, i32::from);
@@ -417,7 +418,11 @@ mod tests {
             let px = stripes(40, 40, vertical);
             let f = Frame::packed(&px, 40, 40, PixelFormat::Gray8).unwrap();
             let mut map = EdgeMap::<2048>::new();
-            map.compute(&f, (0, 0, 40, 40), EdgeParams { bins: 8, threshold: 50, sampling: Sampling::Full, step: 1, flat_bin: false });
+            map.compute(
+                &f,
+                (0, 0, 40, 40),
+                EdgeParams { bins: 8, threshold: 50, sampling: Sampling::Full, step: 1, flat_bin: false },
+            );
             assert_eq!(map.spacing(), 1);
             let mut h = Histogram::<16>::new();
             let l = Lattice::new(Sampling::Full, 0, 10.0, 10.0);
@@ -526,26 +531,50 @@ mod tests {
         let f = Frame::packed(&flat, 64, 64, PixelFormat::Gray8).unwrap();
         let mut map = EdgeMap::<256>::new();
         // 64x64 = 4096 pixels into 256 cells: spacing 4.
-        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 1, sampling: Sampling::Full, step: 1, flat_bin: false });
+        map.compute(
+            &f,
+            (0, 0, 64, 64),
+            EdgeParams { bins: 8, threshold: 1, sampling: Sampling::Full, step: 1, flat_bin: false },
+        );
         assert_eq!(map.spacing(), 4);
         assert_eq!(map.bin_at(30, 30), None, "a flat frame has no edges");
         assert_eq!(map.bin_at(100, 30), None, "outside the frame");
         // Stripes 2 grey levels apart: a gradient of 8, under a threshold of 10.
         let faint: Vec<u8> = (0..64 * 64).map(|i| if (i % 64) / 4 % 2 == 0 { 100 } else { 102 }).collect();
         let f = Frame::packed(&faint, 64, 64, PixelFormat::Gray8).unwrap();
-        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 10, sampling: Sampling::Full, step: 1, flat_bin: false });
+        map.compute(
+            &f,
+            (0, 0, 64, 64),
+            EdgeParams { bins: 8, threshold: 10, sampling: Sampling::Full, step: 1, flat_bin: false },
+        );
         assert!((0..64).all(|x| map.bin_at(x, 30).is_none()));
         // Every 3rd row and column: 22x22 lattice points, 242 bytes of 4-bit
         // cells: they fit. With 16 bins, a byte per cell: every 2nd of them.
-        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 5, sampling: Sampling::Full, step: 3, flat_bin: false });
+        map.compute(
+            &f,
+            (0, 0, 64, 64),
+            EdgeParams { bins: 8, threshold: 5, sampling: Sampling::Full, step: 3, flat_bin: false },
+        );
         assert_eq!(map.spacing(), 1);
-        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 16, threshold: 5, sampling: Sampling::Full, step: 3, flat_bin: false });
+        map.compute(
+            &f,
+            (0, 0, 64, 64),
+            EdgeParams { bins: 16, threshold: 5, sampling: Sampling::Full, step: 3, flat_bin: false },
+        );
         assert_eq!(map.spacing(), 2, "the budget of 256 bytes still rules");
-        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 5, sampling: Sampling::Full, step: 1, flat_bin: false });
+        map.compute(
+            &f,
+            (0, 0, 64, 64),
+            EdgeParams { bins: 8, threshold: 5, sampling: Sampling::Full, step: 1, flat_bin: false },
+        );
         assert!((0..64).any(|x| map.bin_at(x, 30).is_some()));
         // With a flat bin, the weak pixels are counted there (bin 8 of 8 + 1).
         // The map's cells are 4 px apart; those of x < 4 sit on the border.
-        map.compute(&f, (0, 0, 64, 64), EdgeParams { bins: 8, threshold: 10, sampling: Sampling::Full, step: 1, flat_bin: true });
+        map.compute(
+            &f,
+            (0, 0, 64, 64),
+            EdgeParams { bins: 8, threshold: 10, sampling: Sampling::Full, step: 1, flat_bin: true },
+        );
         assert!((4..64).all(|x| map.bin_at(x, 30) == Some(8)));
         assert_eq!(map.bin_at(0, 30), None, "the border has no Sobel window");
     }

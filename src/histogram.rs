@@ -11,10 +11,10 @@
 //! of square roots, turned into a [`Real`] once per comparison.
 
 use crate::colour::{Binning, levels_bin};
-use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
-use crate::geometry::Ellipse;
 use crate::config::MAX_EDGE_BINS;
 use crate::edges::{EdgeMap, NIBBLE_NONE, RowCells};
+use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
+use crate::geometry::Ellipse;
 use crate::region::{Kernel, Lattice, RowSpan, Sampling, floor, for_each_row, quadrant};
 use crate::scalar::{Real, sqrt_q4};
 

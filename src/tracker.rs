@@ -430,7 +430,12 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             particles: [Particle::default(); N],
             copies: [0; N],
             weights: [1.0 / N as Real; N],
-            scratch: Scratch { colour: Histogram::new(), edge: Histogram::new(), map: EdgeMap::new(), lattice: Lattice::FULL },
+            scratch: Scratch {
+                colour: Histogram::new(),
+                edge: Histogram::new(),
+                map: EdgeMap::new(),
+                lattice: Lattice::FULL,
+            },
             table: Table::new(),
             target: None,
             state: TrackState::Searching,

@@ -253,7 +253,11 @@ fn edge_cue_tells_the_target_from_a_same_coloured_decoy() {
     h.compute(&fr[0], &d, Binning::Rgb8x8x8, Sampling::Full);
     let rho_colour = colour.bhattacharyya(&h);
     let mut map = EdgeMap::<16384>::new();
-    map.compute(&fr[0], (0, 0, 128, 96), EdgeParams { bins: 8, threshold: 100, sampling: Sampling::Full, step: 1, flat_bin: false });
+    map.compute(
+        &fr[0],
+        (0, 0, 128, 96),
+        EdgeParams { bins: 8, threshold: 100, sampling: Sampling::Full, step: 1, flat_bin: false },
+    );
     let edge_hist = |e: &Ellipse| {
         let mut h = Histogram::<17>::new();
         let (x0, x1) = ((e.cx - e.hx) as usize, (e.cx + e.hx) as usize);
