@@ -2,13 +2,14 @@
 //! edge-orientation histograms inside the same kernel-weighted ellipses as
 //! colour (the third paper).
 //!
-//! Gradients are computed once per frame into an [`EdgeMap`], and only over
-//! the region the particles cover; each particle's histogram then only looks
-//! orientations up. The map lives in a fixed buffer of `E` cells owned by the
-//! tracker. When the region has more pixels than that, the map is computed on
-//! a coarser grid (every 2nd, 4th, … pixel in each direction) and particles
-//! read the nearest grid cell: the same trade the subsampled colour
-//! histograms make, with no allocation and a bounded cost.
+//! Gradients are computed once per frame into an [`EdgeMap`], only over the
+//! region the particles cover and only at the pixels their histograms
+//! sample (the frame's sampling lattice); each particle's histogram then
+//! reads its samples' cells one after another. The map lives in a fixed
+//! buffer of `E` bytes owned by the tracker, two 4-bit cells per byte. When
+//! the region has more sampled pixels than that, the map keeps every 2nd,
+//! 4th, … lattice row and column and a sample reads the cell at or before
+//! it: bounded memory and cost, but a coarser edge cue.
 
 use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
 use crate::region::{Lattice, RowSpan, Sampling, div_small};

@@ -343,13 +343,14 @@ fn cover(e: &Ellipse, w: usize, h: usize) -> (usize, usize, usize, usize) {
 }
 
 /// A colour particle-filter tracker with `N` particles, colour histograms of
-/// up to `K` bins and an edge map of `E` cells, drawing randomness from `R`.
+/// up to `K` bins and an edge map of `E` bytes, drawing randomness from `R`.
 ///
 /// Everything is stored inline and nothing allocates; `core::mem::size_of`
 /// gives the RAM it needs. Place it in a `static` (e.g. with `static_cell`)
-/// on small stacks. `E` bounds the per-frame edge map: when the particles
-/// cover more pixels than that, edges are computed on a coarser grid (see
-/// [`EdgeMap`]). It costs nothing when the edge cue is off.
+/// on small stacks. `E` bounds the per-frame edge map (4-bit cells, one per
+/// sampled pixel of the area the particles cover: 8192 at the default):
+/// when the area has more, edges are kept on a coarser grid, at a cost in
+/// accuracy (see [`EdgeMap`]). It is unused when the edge cue is off.
 ///
 /// ```
 /// use pftrack::{BoundingBox, Config, Frame, PixelFormat, TrackState, Tracker};
