@@ -273,6 +273,7 @@ impl<const E: usize> EdgeMap<E> {
         }
         match cell(self.lattice_row(j), c, self.nibbles) {
             NONE => None,
+            NIBBLE_NONE if self.nibbles => None,
             v => Some(v as usize),
         }
     }
@@ -281,16 +282,25 @@ impl<const E: usize> EdgeMap<E> {
     pub(crate) fn nibbles(&self) -> bool {
         self.nibbles
     }
+
+    /// The map as rows of 4-bit cells at full resolution of the default
+    /// checkerboard (cell `k - k0` of row `y - j0` is pixel
+    /// `(2k + (y & 1), y)`), if it is that: `(bytes, j0, k0, cols, rows, stride)`.
+    #[allow(clippy::type_complexity)]
+    pub(crate) fn checker_rows(&self) -> Option<(&[u8], usize, usize, usize, usize, usize)> {
+        (self.nibbles && self.shift == 0 && self.lattice == Lattice::CHECKERBOARD)
+            .then_some((&self.bytes[..], self.j0, self.k0, self.cols, self.rows, self.stride))
+    }
 }
 
-/// Cell `c` of a map row, [`NONE`] if it has no bin or is past the row.
+/// Cell `c` of a map row: its bin, or for none (no bin, or past the row)
+/// [`NIBBLE_NONE`] in 4-bit maps and [`NONE`] in byte maps.
 #[inline(always)]
 fn cell(bytes: &[u8], c: usize, nibbles: bool) -> u8 {
     if nibbles {
-        match bytes.get(c >> 1).map(|b| (b >> ((c & 1) * 4)) & 0x0f) {
-            Some(v) if v != NIBBLE_NONE => v,
-            _ => NONE,
-        }
+        // NIBBLE_NONE for no bin, as the paired loops read it: in 4-bit
+        // maps every sample lands in an edge bin (see `histogram::take`).
+        bytes.get(c >> 1).map_or(NIBBLE_NONE, |b| (b >> ((c & 1) * 4)) & 0x0f)
     } else {
         bytes.get(c).copied().unwrap_or(NONE)
     }
@@ -324,7 +334,7 @@ impl RowCells<'_> {
     /// No map: every sample reads [`NONE`].
     pub(crate) const EMPTY: RowCells<'static> = RowCells::General { bytes: &[], base: 0, shift: 0, nibbles: false };
 
-    /// The cell of sample `i`: its bin, or [`NONE`].
+    /// The cell of sample `i`: its bin, or none as [`cell`] says it.
     #[inline(always)]
     pub(crate) fn get(&self, i: usize) -> u8 {
         match *self {

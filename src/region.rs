@@ -43,6 +43,9 @@ impl Lattice {
     /// Every pixel.
     pub(crate) const FULL: Lattice = Lattice { step: 1, checker: false };
 
+    /// The default checkerboard: pixels with `x + y` even.
+    pub(crate) const CHECKERBOARD: Lattice = Lattice { step: 1, checker: true };
+
     /// The lattice for `sampling`, coarsened if needed so that an ellipse with
     /// half axes `hx`, `hy` yields at most about `max_samples` samples
     /// (`0` means no limit).
@@ -165,16 +168,19 @@ impl Extents {
 /// `r²` is `dx²·ax + dy²·ay` in units of `2^-24`: `ax = 2^24 / Hx²`. The centre
 /// is the pixel that contains the real centre; the half-pixel this moves the
 /// kernel by is far below what a histogram can see.
-struct Raster {
-    cx: i32,
-    cy: i32,
-    ax: u32,
-    ay: u32,
-    ry: i32,
+pub(crate) struct Raster {
+    /// The centre pixel.
+    pub cx: i32,
+    pub cy: i32,
+    /// `2^24 / Hx²` and `2^24 / Hy²`.
+    pub ax: u32,
+    pub ay: u32,
+    /// Largest row offset.
+    pub ry: i32,
 }
 
 impl Raster {
-    fn new(e: &Ellipse) -> Option<Self> {
+    pub(crate) fn new(e: &Ellipse) -> Option<Self> {
         // The tracker keeps centres and axes finite and bounded; a caller passing
         // garbage gets an empty region rather than a panic.
         if !(e.cx.is_finite() && e.cy.is_finite() && e.hx.is_finite() && e.hy.is_finite()) {
@@ -235,6 +241,30 @@ pub(crate) struct Kernel {
 }
 
 impl Kernel {
+    /// The weights of a row whose first sample is `u` pixels right of the
+    /// centre column, samples `dx` apart, for `rem = one − ry2` (the row's
+    /// share of the unit): `t(u) = rem − ax·u²` and its first and second
+    /// differences.
+    #[inline(always)]
+    pub(crate) fn start(rem: u32, ax: u32, u: i32, dx: i32) -> Self {
+        let ax = ax as i32;
+        Kernel {
+            t: (rem as i32).wrapping_sub(ax.wrapping_mul(u).wrapping_mul(u)),
+            d: ax.wrapping_mul(dx).wrapping_mul(u.wrapping_mul(2).wrapping_add(dx)).wrapping_neg(),
+            dd: ax.wrapping_mul(dx).wrapping_mul(dx).wrapping_mul(-2),
+        }
+    }
+
+    /// The weight of the current sample clamped to 0 below (for samples
+    /// just past the row's ends, which get none), then moves to the next.
+    #[inline(always)]
+    pub(crate) fn next_weight_or_zero(&mut self) -> u32 {
+        let w = (self.t.max(0) >> (RADIUS2_SHIFT - KERNEL_ONE.trailing_zeros())) as u32;
+        self.t = self.t.wrapping_add(self.d);
+        self.d = self.d.wrapping_add(self.dd);
+        w
+    }
+
     /// The weight of the current sample (at least 1), then moves to the next.
     #[inline(always)]
     pub(crate) fn next_weight(&mut self) -> u32 {
@@ -305,38 +335,36 @@ pub(crate) fn for_each_row<F: FnMut(RowSpan<'_>)>(frame: &Frame<'_>, e: &Ellipse
             && let Some(rem) = one.checked_sub(min_gap).and_then(|m| m.checked_sub(ry2))
             && let Some(row) = frame.row(y as usize)
         {
-            // Widest |dx| with dx²·ax <= rem (the same as isqrt(rem / ax)).
-            let (rem, ax) = (u64::from(rem), u64::from(r.ax));
-            let fits = |d: u32| u64::from(d) * u64::from(d) * ax <= rem;
-            while !fits(dx_max) && dx_max > 0 {
-                dx_max -= 1;
-            }
-            while fits(dx_max + 1) {
-                dx_max += 1;
-            }
+            widen(&mut dx_max, rem, r.ax);
             let half = dx_max as i32;
             let x_lo = (r.cx - half).max(0);
             let x_hi = (r.cx + half).min(width - 1);
             let first = align_up(x_lo, dx as usize, lattice.phase(y as usize));
             if first <= x_hi {
                 let n = div_small((x_hi - first) as u32, dx as u32) as usize + 1;
-                // t(x) = one − ry2 − ax·(x − cx)², and its first and second
-                // differences for steps of dx (wrapping: see Kernel).
-                let (ax, u, dx) = (r.ax as i32, first - r.cx, dx);
-                let t = ((one - ry2) as i32).wrapping_sub(ax.wrapping_mul(u).wrapping_mul(u));
-                let d = ax.wrapping_mul(dx).wrapping_mul(u.wrapping_mul(2).wrapping_add(dx)).wrapping_neg();
-                let dd = ax.wrapping_mul(dx).wrapping_mul(dx).wrapping_mul(-2);
-                visit(RowSpan {
-                    y: y as usize,
-                    row,
-                    x: first as usize,
-                    n,
-                    dx: dx as usize,
-                    kernel: Kernel { t, d, dd },
-                });
+                let kernel = Kernel::start(one - ry2, r.ax, first - r.cx, dx);
+                visit(RowSpan { y: y as usize, row, x: first as usize, n, dx: dx as usize, kernel });
             }
         }
         y += s;
+    }
+}
+
+/// Moves `dx_max` to the widest `|dx|` with `dx²·ax <= rem` (the same as
+/// `isqrt(rem / ax)`), walking from the previous row's width: a row's width
+/// differs little from its neighbour's, so this is cheaper than a square
+/// root. In 32 bits: `ax <= 2^26` (half axes >= 0.5), the walk starts from
+/// a width whose `dx²·ax` fitted an earlier row's `rem` (< 2^24), and each
+/// step up tests `(d + 1)²·ax <= 4·d²·ax <= 2^26` for `d >= 1`, so no
+/// product reaches 2^32.
+#[inline(always)]
+pub(crate) fn widen(dx_max: &mut u32, rem: u32, ax: u32) {
+    let fits = |d: u32| d.wrapping_mul(d).wrapping_mul(ax) <= rem;
+    while !fits(*dx_max) && *dx_max > 0 {
+        *dx_max -= 1;
+    }
+    while fits(*dx_max + 1) {
+        *dx_max += 1;
     }
 }
 
