@@ -195,15 +195,16 @@ impl<const E: usize> EdgeMap<E> {
         // Rows one pixel apart at full resolution (the checkerboard, every
         // pixel) share luma between neighbouring rows: a ring of three luma
         // rows computes each pixel's once (measured on the QVGA audit: 175
-        // instructions per cell with six lumas read per cell).
+        // instructions per cell with six lumas read per cell). Camera
+        // formats only: RGB888 (a host format) keeps the general fill, to
+        // spare flash.
         let rows_fill = lattice.step() == 1 && shift == 0;
         match (frame.format(), rows_fill) {
             (PixelFormat::Rgb565, true) => self.fill_rows::<Rgb565>(frame, bins, threshold, weak),
             (PixelFormat::Gray8, true) => self.fill_rows::<Gray8>(frame, bins, threshold, weak),
             (PixelFormat::Yuv422, true) => self.fill_rows::<Yuv422>(frame, bins, threshold, weak),
-            (PixelFormat::Rgb888, true) => self.fill_rows::<Rgb888>(frame, bins, threshold, weak),
             (PixelFormat::Rgb565, false) => self.fill::<Rgb565>(frame, bins, threshold, weak),
-            (PixelFormat::Rgb888, false) => self.fill::<Rgb888>(frame, bins, threshold, weak),
+            (PixelFormat::Rgb888, _) => self.fill::<Rgb888>(frame, bins, threshold, weak),
             (PixelFormat::Yuv422, false) => self.fill::<Yuv422>(frame, bins, threshold, weak),
             (PixelFormat::Gray8, false) => self.fill::<Gray8>(frame, bins, threshold, weak),
         }
@@ -361,8 +362,14 @@ impl<const E: usize> EdgeMap<E> {
     /// `(2k + (y & 1), y)`), if it is that: `(bytes, j0, k0, cols, rows, stride)`.
     #[allow(clippy::type_complexity)]
     pub(crate) fn checker_rows(&self) -> Option<(&[u8], usize, usize, usize, usize, usize)> {
-        (self.nibbles && self.shift == 0 && self.lattice == Lattice::CHECKERBOARD)
-            .then_some((&self.bytes[..], self.j0, self.k0, self.cols, self.rows, self.stride))
+        (self.nibbles && self.shift == 0 && self.lattice == Lattice::CHECKERBOARD).then_some((
+            &self.bytes[..],
+            self.j0,
+            self.k0,
+            self.cols,
+            self.rows,
+            self.stride,
+        ))
     }
 }
 

@@ -148,6 +148,7 @@ impl<'a> Frame<'a> {
 
     /// The pixel bytes of row `y` (exactly `width * bytes_per_pixel` bytes),
     /// or `None` past the last row.
+    #[inline]
     pub fn row(&self, y: usize) -> Option<&'a [u8]> {
         // The buffer may be longer than the frame: bound by the height, not
         // only by the bytes (found by fuzzing `frame_new`).
@@ -183,6 +184,12 @@ impl<'a> Frame<'a> {
 pub(crate) trait PixelRead {
     /// One pixel's bytes, in formats whose pixels are self-contained.
     type Px: Copy;
+
+    /// Whether region walks on the default checkerboard get their own
+    /// compiled loop in this format (the camera formats whose pixels are
+    /// self-contained: RGB565 and GRAY8); the others share the general walk,
+    /// which saves flash.
+    const CHECKER_WALK: bool = false;
 
     /// The row as an array of pixels, pixel `x` at index `x`; `None` for
     /// YUV 4:2:2, whose pixel pairs share their chroma. Loops that walk a
@@ -267,6 +274,7 @@ pub(crate) struct Gray8;
 
 impl PixelRead for Rgb565 {
     type Px = [u8; 2];
+    const CHECKER_WALK: bool = true;
 
     #[inline(always)]
     fn pixels(row: &[u8]) -> Option<&[[u8; 2]]> {
@@ -354,6 +362,7 @@ impl PixelRead for Yuv422 {
 
 impl PixelRead for Gray8 {
     type Px = u8;
+    const CHECKER_WALK: bool = true;
 
     #[inline(always)]
     fn pixels(row: &[u8]) -> Option<&[u8]> {

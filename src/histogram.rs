@@ -213,18 +213,19 @@ impl<const K: usize> Histogram<K> {
         edge: &mut EdgeHistogram,
     ) {
         let (counts, edge) = (&mut self.counts, &mut edge.counts);
-        // The default case (the checkerboard, pixels whole in their bytes,
-        // a 4-bit edge map at full resolution) has a walk of its own whose
+        // The default case (the checkerboard, RGB565 or GRAY8 pixels, a
+        // 4-bit edge map at full resolution) has a walk of its own whose
         // rows cost a fraction of the general walk's set-up (measured: 454
         // instructions per row outside the pixel loop on a Cortex-M4, for
         // rows of 16 samples); both visit the same samples with the same
         // weights (tested).
-        self.total = match map.and_then(|m| m.checker_rows()) {
-            Some(rows) if lattice == Lattice::CHECKERBOARD && P::pixels(&[]).is_some() => {
+        let checker = match map.and_then(|m| m.checker_rows()) {
+            Some(rows) if lattice == Lattice::CHECKERBOARD && P::CHECKER_WALK => {
                 checker_walk::<P, K>(frame, e, rows, counts, edge)
             }
-            _ => general_walk::<P, K, E>(frame, e, lattice, map, counts, edge),
+            _ => None,
         };
+        self.total = checker.unwrap_or_else(|| general_walk::<P, K, E>(frame, e, lattice, map, counts, edge));
     }
 
     /// Sums the counts into the total (after [`Histogram::add_to_bin`]).
@@ -299,7 +300,8 @@ fn general_walk<P: PixelRead, const K: usize, const E: usize>(
 /// mass: with a 4-bit map every sample adds its weight to one edge value
 /// and to one colour bin (the checkerboard path reads RGB 8x8x8, all of
 /// whose bins exist), so it is the sum over the edge values, and the pixel
-/// loops need not keep it. `edge` must start empty.
+/// loops need not keep it. `edge` must start empty. `None`, before any
+/// work, if the ellipse has rows outside the map.
 #[inline(always)]
 fn checker_walk<P: PixelRead, const K: usize>(
     frame: &Frame<'_>,
@@ -307,15 +309,21 @@ fn checker_walk<P: PixelRead, const K: usize>(
     (bytes, j0, k0, cols, rows, stride): (&[u8], usize, usize, usize, usize, usize),
     counts: &mut [u32; K],
     edge: &mut [u32; MAX_EDGE_BINS],
-) -> u32 {
-    let Some(r) = Raster::new(e) else { return 0 };
+) -> Option<u32> {
+    let Some(r) = Raster::new(e) else { return Some(0) };
     let one = 1u32 << RADIUS2_SHIFT;
     let min_gap = 1u32 << (RADIUS2_SHIFT - KERNEL_ONE.trailing_zeros());
     let (width, height) = (frame.width() as i32, frame.height() as i32);
     let (y_lo, y_hi) = ((r.cy - r.ry).max(0), (r.cy + r.ry).min(height - 1));
+    if y_lo > y_hi {
+        return Some(0);
+    }
+    // The map rows of pixel rows y_lo..=y_hi (lattice row j = y), sliced once.
+    let first_row = (y_lo as usize).checked_sub(j0)?;
+    let end_row = (y_hi as usize + 1).checked_sub(j0).filter(|&e| e <= rows)?;
+    let map_rows = bytes.get(first_row * stride..end_row * stride)?.chunks_exact(stride.max(1));
     let mut dx_max = 0u32;
-    let mut y = y_lo;
-    while y <= y_hi {
+    for (y, cells) in (y_lo..=y_hi).zip(map_rows) {
         let dy = y.abs_diff(r.cy);
         if let Some(ry2) = dy.checked_mul(dy).and_then(|d| d.checked_mul(r.ay))
             && let Some(rem) = (one - min_gap).checked_sub(ry2)
@@ -330,8 +338,6 @@ fn checker_walk<P: PixelRead, const K: usize>(
                 let n = ((x_hi - first) >> 1) as usize + 1;
                 // Lattice column of the first sample: (first - (y & 1)) / 2.
                 let base = ((first >> 1) as usize).wrapping_sub(k0);
-                let j = (y as usize).wrapping_sub(j0);
-                let cells = if j < rows { bytes.get(j * stride..(j + 1) * stride).unwrap_or(&[]) } else { &[] };
                 // Whole cell bytes: from the byte of the first sample to that of
                 // the last, one sample before the first (an odd cell) and one
                 // after the last (an even cell) may come along. They are
@@ -348,7 +354,6 @@ fn checker_walk<P: PixelRead, const K: usize>(
                 {
                     let kernel = Kernel::start(one - ry2, r.ax, x0 - r.cx, 2);
                     pair_loop::<P, K>(quads.as_chunks::<4>().0, cell_bytes, kernel, counts, edge);
-                    y += 1;
                     continue;
                 }
                 let kernel = Kernel::start(one - ry2, r.ax, first - r.cx, 2);
@@ -360,9 +365,8 @@ fn checker_walk<P: PixelRead, const K: usize>(
                 }
             }
         }
-        y += 1;
     }
-    edge.iter().take(NIBBLE_NONE as usize + 1).fold(0u32, |a, &c| a.wrapping_add(c))
+    Some(edge.iter().take(NIBBLE_NONE as usize + 1).fold(0u32, |a, &c| a.wrapping_add(c)))
 }
 
 /// The per-pixel loop of a checkerboard row (samples two pixels apart)
@@ -800,11 +804,11 @@ mod tests {
                 let (mut c2, mut e2) = ([0u32; 512], [0u32; MAX_EDGE_BINS]);
                 let (t1, t2) = match f.format() {
                     PixelFormat::Rgb565 => (
-                        checker_walk::<Rgb565, 512>(f, &e, rows, &mut c1, &mut e1),
+                        checker_walk::<Rgb565, 512>(f, &e, rows, &mut c1, &mut e1).unwrap(),
                         general_walk::<Rgb565, 512, 4096>(f, &e, lattice, Some(&map), &mut c2, &mut e2),
                     ),
                     _ => (
-                        checker_walk::<Gray8, 512>(f, &e, rows, &mut c1, &mut e1),
+                        checker_walk::<Gray8, 512>(f, &e, rows, &mut c1, &mut e1).unwrap(),
                         general_walk::<Gray8, 512, 4096>(f, &e, lattice, Some(&map), &mut c2, &mut e2),
                     ),
                 };
