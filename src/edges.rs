@@ -245,8 +245,18 @@ impl<const E: usize> EdgeMap<E> {
                             && let Some(dst) = ring.get_mut(r % 3)
                         {
                             let src = frame.row(r).unwrap_or(&[]);
-                            for (i, v) in dst.iter_mut().enumerate().take(xb.saturating_sub(xa)) {
-                                *v = P::luma(src, xa + i).unwrap_or(0);
+                            match P::pixels(src).and_then(|px| px.get(xa..xb)) {
+                                // Zipped slices: no bounds test per pixel.
+                                Some(px) => {
+                                    for (v, &p) in dst.iter_mut().zip(px) {
+                                        *v = P::px_luma(p);
+                                    }
+                                }
+                                None => {
+                                    for (i, v) in dst.iter_mut().enumerate().take(xb.saturating_sub(xa)) {
+                                        *v = P::luma(src, xa + i).unwrap_or(0);
+                                    }
+                                }
                             }
                             *slot = r;
                         }

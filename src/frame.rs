@@ -201,6 +201,9 @@ pub(crate) trait PixelRead {
     /// three bits of each channel.
     fn px_8x8x8(p: Self::Px) -> usize;
 
+    /// The 8-bit luma of a pixel from [`PixelRead::pixels`].
+    fn px_luma(p: Self::Px) -> u8;
+
     /// 8-bit RGB of pixel `x` of `row`, or `None` if `x` is past the row.
     fn rgb(row: &[u8], x: usize) -> Option<[u8; 3]>;
 
@@ -295,11 +298,15 @@ impl PixelRead for Rgb565 {
     /// from each byte (see [`RGB565_LUMA`]).
     #[inline(always)]
     fn luma(row: &[u8], x: usize) -> Option<u8> {
-        let [lo, hi] = *Self::pixels(row)?.get(x)?;
+        Some(Self::px_luma(*Self::pixels(row)?.get(x)?))
+    }
+
+    #[inline(always)]
+    fn px_luma([lo, hi]: [u8; 2]) -> u8 {
         let [lo_part, hi_part] = &RGB565_LUMA;
         // A byte indexes a 256-entry table: the compiler drops these checks.
         let sum = lo_part.get(lo as usize).map_or(0, |&v| v as u32) + hi_part.get(hi as usize).map_or(0, |&v| v as u32);
-        Some(((sum + 128) >> 8) as u8)
+        ((sum + 128) >> 8) as u8
     }
 
     #[inline(always)]
@@ -327,6 +334,11 @@ impl PixelRead for Rgb888 {
     }
 
     #[inline(always)]
+    fn px_luma(p: [u8; 3]) -> u8 {
+        luma(p)
+    }
+
+    #[inline(always)]
     fn rgb(row: &[u8], x: usize) -> Option<[u8; 3]> {
         Self::pixels(row)?.get(x).copied()
     }
@@ -342,6 +354,11 @@ impl PixelRead for Yuv422 {
 
     #[inline(always)]
     fn px_8x8x8(_: ()) -> usize {
+        0
+    }
+
+    #[inline(always)]
+    fn px_luma(_: ()) -> u8 {
         0
     }
 
@@ -372,6 +389,11 @@ impl PixelRead for Gray8 {
     #[inline(always)]
     fn px_8x8x8(g: u8) -> usize {
         bin_8x8x8([g, g, g])
+    }
+
+    #[inline(always)]
+    fn px_luma(g: u8) -> u8 {
+        g
     }
 
     #[inline(always)]
