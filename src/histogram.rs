@@ -296,13 +296,17 @@ fn general_walk<P: PixelRead, const K: usize, const E: usize>(
 /// [`general_walk`] for the default checkerboard (pixels with `x + y` even)
 /// and a map from [`EdgeMap::checker_rows`], with the row geometry of
 /// [`for_each_row`] written out for that lattice: rows one apart, samples
-/// two apart, the map row and column by subtraction. Returns the colour
-/// mass: with a 4-bit map every sample adds its weight to one edge value
-/// and to one colour bin (the checkerboard path reads RGB 8x8x8, all of
-/// whose bins exist), so it is the sum over the edge values, and the pixel
-/// loops need not keep it. `edge` must start empty. `None`, before any
-/// work, if the ellipse has rows outside the map.
-#[inline(always)]
+/// two apart, the map row and column by subtraction. Rows `cy − d` and
+/// `cy + d` have the same width, the same parity and so the same samples
+/// and weights: their geometry is worked out once for both. Returns the
+/// colour mass: with a 4-bit map every sample adds its weight to one edge
+/// value and to one colour bin (the checkerboard path reads RGB 8x8x8, all
+/// of whose bins exist), so it is the sum over the edge values, and the
+/// pixel loops need not keep it. `edge` must start empty. `None`, before
+/// any work, if the ellipse has rows outside the map. Out of line, so that
+/// its registers are its own (inlined into the tracker's observation, its
+/// row set-up kept most of its state on the stack).
+#[inline(never)]
 fn checker_walk<P: PixelRead, const K: usize>(
     frame: &Frame<'_>,
     e: &Ellipse,
@@ -318,55 +322,86 @@ fn checker_walk<P: PixelRead, const K: usize>(
     if y_lo > y_hi {
         return Some(0);
     }
-    // The map rows of pixel rows y_lo..=y_hi (lattice row j = y), sliced once.
-    let first_row = (y_lo as usize).checked_sub(j0)?;
-    let end_row = (y_hi as usize + 1).checked_sub(j0).filter(|&e| e <= rows)?;
-    let map_rows = bytes.get(first_row * stride..end_row * stride)?.chunks_exact(stride.max(1));
+    // Every pixel row y_lo..=y_hi must have its map row (lattice row j = y).
+    if (y_lo as usize) < j0 || y_hi as usize + 1 - j0 > rows {
+        return None;
+    }
     let mut dx_max = 0u32;
-    for (y, cells) in (y_lo..=y_hi).zip(map_rows) {
-        let dy = y.abs_diff(r.cy);
-        if let Some(ry2) = dy.checked_mul(dy).and_then(|d| d.checked_mul(r.ay))
-            && let Some(rem) = (one - min_gap).checked_sub(ry2)
-            && let Some(row) = frame.row(y as usize)
-        {
-            widen(&mut dx_max, rem, r.ax);
-            let half = dx_max as i32;
-            let (x_lo, x_hi) = ((r.cx - half).max(0), (r.cx + half).min(width - 1));
-            // The first pixel with x + y even.
-            let first = x_lo + ((x_lo ^ y) & 1);
-            if first <= x_hi {
-                let n = ((x_hi - first) >> 1) as usize + 1;
-                // Lattice column of the first sample: (first - (y & 1)) / 2.
-                let base = ((first >> 1) as usize).wrapping_sub(k0);
-                // Whole cell bytes: from the byte of the first sample to that of
-                // the last, one sample before the first (an odd cell) and one
-                // after the last (an even cell) may come along. They are
-                // outside the ellipse, so their clamped weight is 0 and they
-                // change no count; this needs their pixels on the row.
-                let (m0, m1) = (base >> 1, (base + n - 1) >> 1);
-                let x0 = first - 2 * (base & 1) as i32;
-                let pairs = m1.wrapping_sub(m0).wrapping_add(1);
+    let mut d = 0u32;
+    // Rows past the kernel (r² > one − min_gap) end the walk: r² grows with d.
+    while let Some(ry2) = d.checked_mul(d).and_then(|dd| dd.checked_mul(r.ay))
+        && let Some(rem) = (one - min_gap).checked_sub(ry2)
+        && d <= r.ry as u32
+    {
+        widen(&mut dx_max, rem, r.ax);
+        let half = dx_max as i32;
+        let (x_lo, x_hi) = ((r.cx - half).max(0), (r.cx + half).min(width - 1));
+        let (y_up, y_down) = (r.cy - d as i32, r.cy + d as i32);
+        // The first pixel with x + y even (the same for both rows: they are
+        // 2d apart).
+        let first = x_lo + ((x_lo ^ y_up) & 1);
+        if first <= x_hi {
+            let n = ((x_hi - first) >> 1) as usize + 1;
+            // Lattice column of the first sample: (first - (y & 1)) / 2.
+            let base = ((first >> 1) as usize).wrapping_sub(k0);
+            // Whole cell bytes: from the byte of the first sample to that of
+            // the last, one sample before the first (an odd cell) and one
+            // after the last (an even cell) may come along. They are outside
+            // the ellipse, so their clamped weight is 0 and they change no
+            // count; this needs their pixels on the row.
+            let (m0, m1) = (base >> 1, (base + n - 1) >> 1);
+            let x0 = first - 2 * (base & 1) as i32;
+            let pairs = m1.wrapping_sub(m0).wrapping_add(1);
+            let padded = Kernel::start(one - ry2, r.ax, x0 - r.cx, 2);
+            // Row cy − d, then (if d > 0) row cy + d.
+            for y in [y_up, y_down].into_iter().take(1 + (d > 0) as usize) {
+                if !(y_lo..=y_hi).contains(&y) {
+                    continue;
+                }
+                let j = y as usize - j0;
+                let (Some(row), Some(cells)) = (frame.row(y as usize), bytes.get(j * stride..(j + 1) * stride)) else {
+                    continue;
+                };
                 if base < cols
                     && x0 >= 0
                     && let Some(px) = P::pixels(row)
                     && let Some(quads) = px.get(x0 as usize..x0 as usize + 4 * pairs)
                     && let Some(cell_bytes) = cells.get(m0..m0 + pairs)
                 {
-                    let kernel = Kernel::start(one - ry2, r.ax, x0 - r.cx, 2);
-                    pair_loop::<P, K>(quads.as_chunks::<4>().0, cell_bytes, kernel, counts, edge);
-                    continue;
-                }
-                let kernel = Kernel::start(one - ry2, r.ax, first - r.cx, 2);
-                let span = RowSpan { y: y as usize, row, x: first as usize, n, dx: 2, kernel };
-                let paired = if base < cols { paired_row::<P, K>(&span, cells, base, counts, edge) } else { None };
-                if paired.is_none() {
-                    let cells = RowCells::General { bytes: cells, base, shift: 0, nibbles: true };
-                    indexed_row::<P, K>(&span, &cells, counts, edge);
+                    pair_loop::<P, K>(quads.as_chunks::<4>().0, cell_bytes, padded, counts, edge);
+                } else {
+                    let start = (one - ry2, r.ax, first - r.cx);
+                    edge_row::<P, K>(row, y as usize, first as usize, n, start, (cells, base, cols), counts, edge);
                 }
             }
         }
+        d += 1;
     }
     Some(edge.iter().take(NIBBLE_NONE as usize + 1).fold(0u32, |a, &c| a.wrapping_add(c)))
+}
+
+/// A row of [`checker_walk`] at the frame's or the map's edge (its padded
+/// cell bytes or pixels are not all there): the exact samples only. Cold and
+/// out of line, to keep the common rows' registers free.
+#[cold]
+#[inline(never)]
+#[allow(clippy::too_many_arguments)]
+fn edge_row<P: PixelRead, const K: usize>(
+    row: &[u8],
+    y: usize,
+    first: usize,
+    n: usize,
+    (rem, ax, u): (u32, u32, i32),
+    (cells, base, cols): (&[u8], usize, usize),
+    counts: &mut [u32; K],
+    edge: &mut [u32; MAX_EDGE_BINS],
+) {
+    let span = RowSpan { y, row, x: first, n, dx: 2, kernel: Kernel::start(rem, ax, u, 2) };
+    let paired = if base < cols { paired_row::<P, K>(&span, cells, base, counts, edge) } else { None };
+    if paired.is_none() {
+        let cells = RowCells::General { bytes: cells, base, shift: 0, nibbles: true };
+        indexed_row::<P, K>(&span, &cells, counts, edge);
+    }
 }
 
 /// The per-pixel loop of a checkerboard row (samples two pixels apart)

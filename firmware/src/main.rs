@@ -166,6 +166,12 @@ fn run() -> bool {
     let peak = stack_floor.map(peak_stack);
 
     let steps = &mut ticks[..measured];
+    // Every step in order, so that an outlier frame can be found.
+    let _ = write!(out, "instructions per step, in order:");
+    for t in steps.iter() {
+        let _ = write!(out, " {}", t * INSTRUCTIONS_PER_TICK);
+    }
+    let _ = writeln!(out);
     steps.sort_unstable();
     if let (Some(min), Some(max)) = (steps.first(), steps.last()) {
         let med = steps[steps.len() / 2];
