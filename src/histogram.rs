@@ -646,7 +646,7 @@ impl<const K: usize> Model<K> {
     fn refresh_roots(&mut self) {
         for (s, &q) in self.sqrt_q.iter_mut().zip(self.q.iter()) {
             // sqrt(q · 2^16 · 2^8) = sqrt(q_real) · 2^12
-            *s = ((q as u32) << 8).isqrt() as u16;
+            *s = crate::scalar::isqrt((q as u32) << 8) as u16;
         }
     }
 

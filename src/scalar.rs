@@ -147,7 +147,59 @@ pub fn normal_from_bits(bits: u64) -> Real {
 /// The four extra fractional bits keep small histogram bins (a single pixel
 /// near the ellipse rim) from being rounded to nothing.
 pub fn sqrt_q4(x: u32) -> u32 {
-    if x < (1 << 24) { (x << 8).isqrt() } else { x.isqrt() << 4 }
+    if x < (1 << 24) { isqrt(x << 8) } else { isqrt(x) << 4 }
+}
+
+/// `⌊sqrt(x)⌋`, exactly, with one division: a first guess from a table on
+/// the top bits of `x`, one integer Newton step and a correction.
+///
+/// `core`'s `u32::isqrt` took about 64 instructions per call on the
+/// Cortex-M4F (two divisions and a long normalisation), and the
+/// Bhattacharyya sum takes one root per non-empty bin of every particle.
+/// Why it is exact: an integer Newton step `⌊(y + ⌊x / y⌋) / 2⌋` from any
+/// `y >= 1` is `>= ⌊sqrt(x)⌋` (it is the floor of `(y + x / y) / 2 >=
+/// sqrt(x)`), so stepping down while `y² > x` ends on the root; from the
+/// table's guess (within 0.4% of the root) the step lands at most a couple
+/// of units above it. Tested against `u32::isqrt` on every `x < 2^26`, and
+/// around every square up to `2^32`.
+#[inline]
+pub fn isqrt(x: u32) -> u32 {
+    // x >> k in 64..256 (or x itself below 64), k even, so that
+    // sqrt(x) = sqrt(x >> k) · 2^(k/2) up to the bits shifted out.
+    let top_bit = 31u32.saturating_sub(x.leading_zeros());
+    let k = top_bit.saturating_sub(6) & !1;
+    let t = (x >> k) as u8;
+    // The guess, rounded up so that it is never 0.
+    let y = ((ROOT_GUESS[t as usize] as u32) << (k / 2)).div_ceil(16);
+    let mut y = (y + x / y) / 2;
+    while (y as u64) * (y as u64) > x as u64 {
+        y -= 1;
+    }
+    y
+}
+
+/// `16 · sqrt(t + 1/2)`, rounded, for `t` in `0..256` (the last capped at
+/// 255): [`isqrt`]'s first guesses.
+static ROOT_GUESS: [u8; 256] = root_guesses();
+
+const fn root_guesses() -> [u8; 256] {
+    let mut g = [0u8; 256];
+    let mut t = 0;
+    while t < 256 {
+        // round(16·sqrt(t + 1/2)) = round(sqrt(256·t + 128)), by integer search.
+        let target = 256 * t as u32 + 128;
+        let mut r = 0u32;
+        while (r + 1) * (r + 1) <= target {
+            r += 1;
+        }
+        // r = ⌊sqrt(target)⌋; round up when target is past (r + 1/2)².
+        if target > r * r + r {
+            r += 1;
+        }
+        g[t] = if r > 255 { 255 } else { r as u8 };
+        t += 1;
+    }
+    g
 }
 
 #[cfg(test)]
@@ -216,6 +268,32 @@ mod tests {
         assert_eq!(ln(1.0), 0.0);
         assert_eq!(ln(0.0), Real::NEG_INFINITY);
         assert!(ln(-1.0).is_nan() && ln(Real::NAN).is_nan());
+    }
+
+    #[test]
+    fn isqrt_is_the_exact_root() {
+        // Reason: `u32::isqrt` from core is the reference. Every x below
+        // 2^26 (2^22 in unoptimised builds, to keep them fast), then for
+        // every root r the values where the answer changes: r² − 1, r², r² + 1.
+        let limit = if cfg!(debug_assertions) { 1u32 << 22 } else { 1 << 26 };
+        for x in 0..limit {
+            assert_eq!(isqrt(x), x.isqrt(), "x = {x}");
+        }
+        for r in 0..=u16::MAX as u32 {
+            let sq = r * r;
+            for x in [sq.wrapping_sub(1), sq, sq + 1, sq + r, sq + 2 * r] {
+                assert_eq!(isqrt(x), x.isqrt(), "x = {x}");
+            }
+        }
+        assert_eq!(isqrt(u32::MAX), 65_535);
+    }
+
+    #[test]
+    #[ignore = "every u32: about a minute; run with --ignored after changing isqrt"]
+    fn isqrt_is_the_exact_root_everywhere() {
+        for x in 0..=u32::MAX {
+            assert_eq!(isqrt(x), x.isqrt(), "x = {x}");
+        }
     }
 
     #[test]
