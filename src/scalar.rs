@@ -169,8 +169,11 @@ pub fn isqrt(x: u32) -> u32 {
     let top_bit = 31u32.saturating_sub(x.leading_zeros());
     let k = top_bit.saturating_sub(6) & !1;
     let t = (x >> k) as u8;
-    // The guess, rounded up so that it is never 0.
-    let y = ((ROOT_GUESS[t as usize] as u32) << (k / 2)).div_ceil(16);
+    // The guess, rounded up (the table's entries are at least 11, so it is
+    // never 0; `max` says so to the compiler, which drops the
+    // division-by-zero check).
+    let guess = ROOT_GUESS.get(t as usize).copied().unwrap_or(u8::MAX) as u32;
+    let y = (guess << (k / 2)).div_ceil(16).max(1);
     let mut y = (y + x / y) / 2;
     while (y as u64) * (y as u64) > x as u64 {
         y -= 1;
@@ -182,6 +185,8 @@ pub fn isqrt(x: u32) -> u32 {
 /// 255): [`isqrt`]'s first guesses.
 static ROOT_GUESS: [u8; 256] = root_guesses();
 
+// Indices below 256 in a 256-entry array; `get` is not available in const fns.
+#[allow(clippy::indexing_slicing)]
 const fn root_guesses() -> [u8; 256] {
     let mut g = [0u8; 256];
     let mut t = 0;
