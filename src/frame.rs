@@ -141,6 +141,15 @@ impl<'a> Frame<'a> {
         self.stride
     }
 
+    /// Bytes `lo..hi` of row `y`, for loops that have checked `y` and the
+    /// range against the frame's size themselves (so that a row costs one
+    /// bounds test); `None` if the bytes are not in the buffer.
+    #[inline(always)]
+    pub(crate) fn row_bytes(&self, y: usize, lo: usize, hi: usize) -> Option<&'a [u8]> {
+        let start = y.checked_mul(self.stride)?;
+        self.data.get(start.checked_add(lo)?..start.checked_add(hi)?)
+    }
+
     /// The pixel format.
     pub fn format(&self) -> PixelFormat {
         self.format

@@ -326,6 +326,12 @@ fn checker_walk<P: PixelRead, const K: usize>(
     if (y_lo as usize) < j0 || y_hi as usize + 1 - j0 > rows {
         return None;
     }
+    // Map row of pixel row y (lattice row j = y), for y in y_lo..=y_hi.
+    let map_row = |y: i32| {
+        // j < rows (checked above), so j·stride is within the map.
+        let j = (y as usize).checked_sub(j0).unwrap_or(rows);
+        bytes.get(j * stride..(j + 1) * stride).unwrap_or(&[])
+    };
     let mut dx_max = 0u32;
     let mut d = 0u32;
     // Rows past the kernel (r² > one − min_gap) end the walk: r² grows with d.
@@ -352,32 +358,69 @@ fn checker_walk<P: PixelRead, const K: usize>(
             let (m0, m1) = (base >> 1, (base + n - 1) >> 1);
             let x0 = first - 2 * (base & 1) as i32;
             let pairs = m1.wrapping_sub(m0).wrapping_add(1);
-            let padded = Kernel::start(one - ry2, r.ax, x0 - r.cx, 2);
-            // Row cy − d, then (if d > 0) row cy + d.
-            for y in [y_up, y_down].into_iter().take(1 + (d > 0) as usize) {
-                if !(y_lo..=y_hi).contains(&y) {
-                    continue;
-                }
-                let j = y as usize - j0;
-                let (Some(row), Some(cells)) = (frame.row(y as usize), bytes.get(j * stride..(j + 1) * stride)) else {
-                    continue;
-                };
-                if base < cols
-                    && x0 >= 0
-                    && let Some(px) = P::pixels(row)
-                    && let Some(quads) = px.get(x0 as usize..x0 as usize + 4 * pairs)
-                    && let Some(cell_bytes) = cells.get(m0..m0 + pairs)
-                {
-                    pair_loop::<P, K>(quads.as_chunks::<4>().0, cell_bytes, padded, counts, edge);
-                } else {
-                    let start = (one - ry2, r.ax, first - r.cx);
-                    edge_row::<P, K>(row, y as usize, first as usize, n, start, (cells, base, cols), counts, edge);
-                }
+            // The padded samples' pixels must be on the row, and their
+            // cells in the map.
+            let px_bytes = core::mem::size_of::<P::Px>();
+            let fast = (base < cols && x0 >= 0 && x0 as usize + 4 * pairs <= width as usize && m0 + pairs <= stride)
+                .then(|| (x0 as usize * px_bytes, (x0 as usize + 4 * pairs) * px_bytes));
+            let plan = RowPlan {
+                fast,
+                padded: Kernel::start(one - ry2, r.ax, x0 - r.cx, 2),
+                first: first as usize,
+                n,
+                start: (one - ry2, r.ax, first - r.cx),
+                cells: (base, cols, m0, pairs),
+            };
+            // Rows cy − d and (if d > 0) cy + d.
+            let rows = y_lo..=y_hi;
+            if rows.contains(&y_up) {
+                checker_row::<P, K>(frame, y_up as usize, &plan, map_row(y_up), counts, edge);
+            }
+            if d > 0 && rows.contains(&y_down) {
+                checker_row::<P, K>(frame, y_down as usize, &plan, map_row(y_down), counts, edge);
             }
         }
         d += 1;
     }
     Some(edge.iter().take(NIBBLE_NONE as usize + 1).fold(0u32, |a, &c| a.wrapping_add(c)))
+}
+
+/// What rows `cy − d` and `cy + d` of [`checker_walk`] share.
+struct RowPlan {
+    /// The byte range of the padded samples' pixels in a row, if they are
+    /// all on it and their cells are all in the map.
+    fast: Option<(usize, usize)>,
+    /// The weights from the first padded sample.
+    padded: Kernel,
+    /// The first exact sample and the number of them.
+    first: usize,
+    n: usize,
+    /// [`Kernel::start`]'s arguments for the first exact sample.
+    start: (u32, u32, i32),
+    /// The first exact sample's map column, the map's columns, and the
+    /// padded samples' first cell byte and number of bytes.
+    cells: (usize, usize, usize, usize),
+}
+
+/// One row of [`checker_walk`]: pixel row `y`, map row `cells`.
+#[inline(always)]
+fn checker_row<P: PixelRead, const K: usize>(
+    frame: &Frame<'_>,
+    y: usize,
+    plan: &RowPlan,
+    cells: &[u8],
+    counts: &mut [u32; K],
+    edge: &mut [u32; MAX_EDGE_BINS],
+) {
+    let (base, cols, m0, pairs) = plan.cells;
+    if let Some((lo, hi)) = plan.fast
+        && let Some(px) = frame.row_bytes(y, lo, hi).and_then(P::pixels)
+        && let Some(cell_bytes) = cells.get(m0..m0 + pairs)
+    {
+        pair_loop::<P, K>(px.as_chunks::<4>().0, cell_bytes, plan.padded, counts, edge);
+    } else if let Some(row) = frame.row(y) {
+        edge_row::<P, K>(row, y, plan.first, plan.n, plan.start, (cells, base, cols), counts, edge);
+    }
 }
 
 /// A row of [`checker_walk`] at the frame's or the map's edge (its padded
