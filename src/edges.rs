@@ -222,8 +222,11 @@ impl<const E: usize> EdgeMap<E> {
         let (cols, stride, nibbles, k0, j0) = (self.cols, self.stride, self.nibbles, self.k0, self.j0);
         let t2 = threshold as i32 * threshold as i32;
         // Cells c0..c1 of a tile need pixels from x(c0) - 1 to x(c1 - 1) + 1,
-        // where x(c) = phase + (k0 + c)·xs with phase 0 or 1.
-        let per_tile = (SPAN - 4) / xs + 1;
+        // where x(c) = phase + (k0 + c)·xs with phase 0 or 1, and
+        // `ring_cells` reads five-column windows from the first of each
+        // pair of cells: an even number per tile, so that pairs (and cell
+        // bytes) never straddle two tiles.
+        let per_tile = ((SPAN - 6) / xs + 1) & !1;
         let mut ring = [[0u8; SPAN]; 3];
         let mut c0 = 0;
         while c0 < cols {
@@ -263,28 +266,10 @@ impl<const E: usize> EdgeMap<E> {
                     }
                 }
                 let row_of = |i: usize| ring.get(i).map_or(&[][..], |r| &r[..]);
-                let (r0, r1, r2) = (row_of((y + 2) % 3), row_of(y % 3), row_of((y + 1) % 3));
-                let phase = self.lattice.phase(y);
-                for c in c0..c1 {
-                    let x = phase + (k0 + c) * xs;
-                    let v = if border || x == 0 || x + 1 >= w {
-                        NONE
-                    } else {
-                        // Window columns x-1..=x+1 are ring columns i..i+3.
-                        let i = x - 1 - xa;
-                        match (r0.get(i..i + 3), r1.get(i..i + 3), r2.get(i..i + 3)) {
-                            (Some(&[a, b, c]), Some(&[d, _, f]), Some(&[g, hh, k])) => {
-                                // Written out: an array `map` here is a loop on a Cortex-M4.
-                                let (a, b, c, d) = (a as i32, b as i32, c as i32, d as i32);
-                                let (f, g, hh, k) = (f as i32, g as i32, hh as i32, k as i32);
-                                let (gx, gy) = sobel([a, b, c, d, 0, f, g, hh, k]);
-                                if gx * gx + gy * gy < t2 { weak } else { orientation_bin(gx, gy, bins) as u8 }
-                            }
-                            _ => NONE,
-                        }
-                    };
-                    put(out, c, v, nibbles);
-                }
+                let window = (row_of((y + 2) % 3), row_of(y % 3), row_of((y + 1) % 3));
+                let x_first = self.lattice.phase(y) + (k0 + c0) * xs;
+                let sobel_cfg = SobelCells { xs, w, border, bins, t2, weak, nibbles };
+                ring_cells(out, window, xa, x_first, (c0, c1), &sobel_cfg);
             }
             c0 = c1;
         }
@@ -380,6 +365,96 @@ impl<const E: usize> EdgeMap<E> {
             self.rows,
             self.stride,
         ))
+    }
+}
+
+/// What [`ring_cells`] needs besides the ring: the cells' spacing `xs`, the
+/// frame width `w`, whether the row is on the frame's border, the number of
+/// orientation bins, the squared threshold, the value of weak cells, and
+/// whether cells are 4-bit.
+struct SobelCells {
+    xs: usize,
+    w: usize,
+    border: bool,
+    bins: usize,
+    t2: i32,
+    weak: u8,
+    nibbles: bool,
+}
+
+/// Cells `c0..c1` (`c0` even) of map row `out` from a ring of three luma
+/// rows holding pixels from column `xa`, cell `c0` at pixel `x_first`.
+/// Two cells at a time, from one five-column window per ring row: the
+/// Sobel sums are taken per column (`S = top + 2·middle + bottom`,
+/// `D = bottom − top`, so `gx = S(x+1) − S(x−1)` and
+/// `gy = D(x−1) + 2·D(x) + D(x+1)`, the same integers as [`sobel`]),
+/// and the two cells share a column (checkerboard) or two (every pixel);
+/// a pair's cells fill one byte of a 4-bit map. Pairs at the frame's
+/// border, and a last cell alone, go one cell at a time. Out of line and
+/// shared by every pixel format.
+#[inline(never)]
+fn ring_cells(
+    out: &mut [u8],
+    (r0, r1, r2): (&[u8], &[u8], &[u8]),
+    xa: usize,
+    x_first: usize,
+    (c0, c1): (usize, usize),
+    cfg: &SobelCells,
+) {
+    let SobelCells { xs, w, border, bins, t2, weak, nibbles } = *cfg;
+    let classify = |gx: i32, gy: i32| if gx * gx + gy * gy < t2 { weak } else { orientation_bin(gx, gy, bins) as u8 };
+    // One cell, with every test (the frame border, the window's pixels).
+    let single = |x: usize| {
+        if border || x == 0 || x + 1 >= w {
+            return NONE;
+        }
+        let i = x.wrapping_sub(xa + 1);
+        match (r0.get(i..i + 3), r1.get(i..i + 3), r2.get(i..i + 3)) {
+            (Some(&[a, b, c]), Some(&[d, _, f]), Some(&[g, h, k])) => {
+                let (gx, gy) = sobel([a, b, c, d, 0, f, g, h, k].map(i32::from));
+                classify(gx, gy)
+            }
+            _ => NONE,
+        }
+    };
+    let (mut c, mut x) = (c0, x_first);
+    while c < c1 {
+        let both = c + 1 < c1;
+        let i = x.wrapping_sub(xa + 1);
+        let inner = !border && x >= 1 && both && x + xs + 1 < w;
+        let (va, vb) = match (inner, r0.get(i..i + 5), r1.get(i..i + 5), r2.get(i..i + 5)) {
+            (true, Some(&[t0, t1, t2_, t3, t4]), Some(&[m0, m1, m2, m3, m4]), Some(&[b0, b1, b2, b3, b4])) => {
+                let s = |t: u8, m: u8, b: u8| t as i32 + 2 * m as i32 + b as i32;
+                let d = |t: u8, b: u8| b as i32 - t as i32;
+                let (s0, s2) = (s(t0, m0, b0), s(t2_, m2, b2));
+                let (d0, d1, d2, d3) = (d(t0, b0), d(t1, b1), d(t2_, b2), d(t3, b3));
+                let va = classify(s2 - s0, d0 + 2 * d1 + d2);
+                let vb = if xs == 2 {
+                    classify(s(t4, m4, b4) - s2, d2 + 2 * d3 + d(t4, b4))
+                } else {
+                    classify(s(t3, m3, b3) - s(t1, m1, b1), d1 + 2 * d2 + d3)
+                };
+                (va, vb)
+            }
+            _ => (single(x), if both { single(x + xs) } else { NONE }),
+        };
+        if nibbles {
+            // A cell past the row's last leaves its nibble 0 (never read
+            // with a weight).
+            if let Some(byte) = out.get_mut(c >> 1) {
+                let high = if both { vb.min(NIBBLE_NONE) << 4 } else { 0 };
+                *byte = va.min(NIBBLE_NONE) | high;
+            }
+        } else {
+            if let Some(byte) = out.get_mut(c) {
+                *byte = va;
+            }
+            if both && let Some(byte) = out.get_mut(c + 1) {
+                *byte = vb;
+            }
+        }
+        c += 2;
+        x += 2 * xs;
     }
 }
 
