@@ -553,7 +553,7 @@ pub fn sobel(p: [i32; 9]) -> (i32, i32) {
 mod tests {
     use super::*;
     use crate::geometry::Ellipse;
-    use crate::histogram::Histogram;
+    use crate::histogram::{Clear, Histogram};
     use crate::region::for_each_in_ellipse;
 
     #[test]
@@ -735,7 +735,7 @@ mod tests {
                 let e = Ellipse { cx: 20.0, cy: 15.0, hx: 12.0, hy: 9.0 };
                 let mut via_walk = Histogram::<17>::new();
                 let whole = crate::histogram::Layout::whole(crate::colour::Binning::Rgb8x8x8);
-                Histogram::<512>::new().compute_with(&f, &e, &whole, lattice, Some((&map, &mut via_walk)));
+                Histogram::<512>::new().compute_with(&f, &e, &whole, lattice, Some((&map, &mut via_walk)), Clear::All);
                 let mut via_lookup = Histogram::<17>::new();
                 for_each_in_ellipse(&f, &e, lattice, |_, x, y, w| {
                     if let Some(b) = direct(x, y, bins) {
@@ -750,7 +750,14 @@ mod tests {
                 small.compute(&f, (x0, y0, w, h), params);
                 assert!(small.spacing() > 1);
                 let mut via_walk = Histogram::<17>::new();
-                Histogram::<512>::new().compute_with(&f, &e, &whole, lattice, Some((&small, &mut via_walk)));
+                Histogram::<512>::new().compute_with(
+                    &f,
+                    &e,
+                    &whole,
+                    lattice,
+                    Some((&small, &mut via_walk)),
+                    Clear::All,
+                );
                 let mut via_lookup = Histogram::<17>::new();
                 for_each_in_ellipse(&f, &e, lattice, |_, x, y, w| {
                     if let Some(b) = small.bin_at(x, y) {

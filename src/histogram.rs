@@ -133,12 +133,13 @@ impl<const K: usize> Histogram<K> {
 
     /// [`Histogram::compute`] on an explicit lattice.
     pub(crate) fn compute_on(&mut self, frame: &Frame<'_>, e: &Ellipse, binning: Binning, lattice: Lattice) {
-        self.compute_with::<0>(frame, e, &Layout::whole(binning), lattice, None);
+        self.compute_with::<0>(frame, e, &Layout::whole(binning), lattice, None, Clear::All);
     }
 
     /// [`Histogram::compute_on`] with `layout`, also filling an edge
     /// histogram from `edges`' map (which must be on `lattice`): both cues
-    /// ride on one walk over the region.
+    /// ride on one walk over the region. `clear` says which colour bins
+    /// must come out exact.
     #[inline(always)]
     pub(crate) fn compute_with<const E: usize>(
         &mut self,
@@ -147,8 +148,19 @@ impl<const K: usize> Histogram<K> {
         layout: &Layout,
         lattice: Lattice,
         edges: Option<(&EdgeMap<E>, &mut EdgeHistogram)>,
+        clear: Clear<'_>,
     ) {
-        self.clear();
+        match clear {
+            Clear::All => self.clear(),
+            Clear::Support(support) => {
+                support.for_each::<K>(0, K, |b| {
+                    if let Some(c) = self.counts.get_mut(b) {
+                        *c = 0;
+                    }
+                });
+                self.total = 0;
+            }
+        }
         let mut unused = EdgeHistogram::new();
         let (map, edge) = match edges {
             Some((map, hist)) => (Some(map), hist),
@@ -232,6 +244,20 @@ impl<const K: usize> Histogram<K> {
     fn recount(&mut self) {
         self.total = self.counts.iter().fold(0u32, |a, &c| a.wrapping_add(c));
     }
+}
+
+/// Which colour bins [`Histogram::compute_with`] starts from zero.
+#[derive(Copy, Clone)]
+pub(crate) enum Clear<'a> {
+    /// All of them: the histogram comes out exact.
+    All,
+    /// Only a model's non-empty bins, for a histogram that is only compared
+    /// with that model (one segment): the Bhattacharyya and intersection
+    /// sums read no other bin (an intersection term is 0 where the model
+    /// is), so the rest may keep what earlier regions left there. It
+    /// spares clearing all `K` bins per particle (measured on the QVGA
+    /// audit: 0.1 M instructions per frame in `memclr` for 512 bins).
+    Support(&'a Support),
 }
 
 /// An edge-orientation histogram: up to 16 orientation bins and a flat one.
@@ -606,7 +632,7 @@ pub struct Model<const K: usize> {
 /// those: visiting them through the bitmap is what keeps the sum from
 /// costing a pass over all 512 bins per particle.
 #[derive(Clone, Debug, PartialEq, Eq)]
-struct Support {
+pub(crate) struct Support {
     words: [u32; 16],
 }
 
@@ -753,6 +779,12 @@ impl<const K: usize> Model<K> {
     /// The normalised bins, in units of `2^-16`.
     pub fn bins(&self) -> &[u16; K] {
         &self.q
+    }
+
+    /// The model's non-empty bins, for [`Clear::Support`]; `None` for a
+    /// model of several segments, whose comparisons need every bin.
+    pub(crate) fn support(&self) -> Option<&Support> {
+        (self.segments <= 1).then_some(&self.support)
     }
 
     /// `sqrt(q(u))` per bin, in units of `2^-12`.
@@ -1031,6 +1063,42 @@ mod tests {
             let want = reference_rho(&p, &q);
             assert!((got - want).abs() < 0.005, "trial {trial}: {got} vs {want}");
         }
+    }
+
+    #[test]
+    fn clearing_the_support_only_gives_the_same_similarities() {
+        // Reason: a histogram cleared only on the model's support (holding
+        // leftovers of earlier regions elsewhere) must compare with that
+        // model exactly as a freshly cleared one does, under both similarity
+        // kinds: the sums read no other bin. Regions of a random RGB565
+        // scene, one after another in the same histogram.
+        let (w, h) = (80usize, 60usize);
+        let mut seed = 99u32;
+        let mut next = move || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            seed >> 8
+        };
+        let px: Vec<u8> = (0..w * h * 2).map(|_| (next() % 7 * 37) as u8).collect();
+        let f = Frame::packed(&px, w, h, PixelFormat::Rgb565).unwrap();
+        let layout = Layout::whole(Binning::Rgb8x8x8);
+        let lattice = Lattice::CHECKERBOARD;
+        let mut target = Histogram::<512>::new();
+        target.compute_on(&f, &Ellipse { cx: 40.0, cy: 30.0, hx: 9.0, hy: 7.0 }, Binning::Rgb8x8x8, lattice);
+        let model = Model::from_histogram(&target).unwrap();
+        let support = model.support().expect("one segment");
+        let mut reused = Histogram::<512>::new();
+        let mut fresh = Histogram::<512>::new();
+        for i in 0..40 {
+            let e = Ellipse { cx: (next() % 80) as f32, cy: (next() % 60) as f32, hx: 3.0 + i as f32 * 0.3, hy: 6.0 };
+            reused.compute_with::<0>(&f, &e, &layout, lattice, None, Clear::Support(support));
+            fresh.compute_with::<0>(&f, &e, &layout, lattice, None, Clear::All);
+            for kind in [Similarity::Bhattacharyya, Similarity::Intersection] {
+                assert_eq!(model.compare(&reused, kind), model.compare(&fresh, kind), "{e:?} {kind:?}");
+            }
+        }
+        // The leftovers are really there: outside the support, the reused
+        // histogram differs from the fresh one.
+        assert_ne!(reused.counts(), fresh.counts());
     }
 
     /// The Bhattacharyya sum over every bin, with no support bitmap, in

@@ -7,7 +7,7 @@ use crate::error::{ConfigError, Error, ParamProblem, RegionError};
 use crate::filter::{Bounds, Particle, mean_state, resample};
 use crate::frame::Frame;
 use crate::geometry::{BoundingBox, Ellipse};
-use crate::histogram::{Histogram, Layout, Model};
+use crate::histogram::{Clear, Histogram, Layout, Model};
 use crate::likelihood::gaussian;
 use crate::region::{Extents, Lattice};
 use crate::scalar::{Real, sqrt, unit_from_bits};
@@ -259,8 +259,9 @@ struct Scratch<const K: usize, const E: usize> {
 }
 
 impl<const K: usize, const E: usize> Scratch<K, E> {
-    /// Histograms of ellipse `e`, left in `self` (for a model update).
-    fn observe(&mut self, frame: &Frame<'_>, e: &Ellipse, layout: &Layout, edges: bool) {
+    /// Histograms of ellipse `e`, left in `self` (for a model update), with
+    /// the colour bins `clear` says exact.
+    fn observe(&mut self, frame: &Frame<'_>, e: &Ellipse, layout: &Layout, edges: bool, clear: Clear<'_>) {
         // One walk over the region feeds both cues.
         let Scratch { colour, edge, map, lattice } = self;
         let edges = if edges {
@@ -269,12 +270,18 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
             edge.clear();
             None
         };
-        colour.compute_with(frame, e, layout, *lattice, edges);
+        colour.compute_with(frame, e, layout, *lattice, edges, clear);
     }
 
     /// How ellipse `e` compares with `models`; all similarities in `[0, 1]`.
-    fn similarity(&mut self, cfg: &Config, frame: &Frame<'_>, models: &Models<K>, e: &Ellipse) -> Seen {
-        self.observe(frame, e, &models.layout, models.edge.is_some());
+    /// With `keep`, the histograms left in `self` are exact (for a model
+    /// update); without, only what the comparison read is.
+    fn similarity(&mut self, cfg: &Config, frame: &Frame<'_>, models: &Models<K>, e: &Ellipse, keep: bool) -> Seen {
+        let clear = match models.colour.support() {
+            Some(support) if !keep => Clear::Support(support),
+            _ => Clear::All,
+        };
+        self.observe(frame, e, &models.layout, models.edge.is_some(), clear);
         let per = models.colour.compare(&self.colour, cfg.similarity);
         let (rho, quads) =
             if cfg!(feature = "quadrants") && cfg.quadrants { (median4(per), per) } else { (per[0], [0.0; 4]) };
@@ -538,7 +545,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         if cfg.binning == crate::colour::Binning::Adaptive {
             layout.levels = crate::bins::choose_levels(&mut sc.colour, frame, &e, sc.lattice, segments);
         }
-        sc.observe(frame, &e, &layout, cfg.edges.is_some());
+        sc.observe(frame, &e, &layout, cfg.edges.is_some(), Clear::All);
         if !Model::can_learn(&sc.colour, segments) {
             return Err(RegionError::NoPixels.into());
         }
@@ -573,7 +580,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
                     // ones can match the target's orientations well (measured
                     // on the exit-and-return scene), which would make an empty
                     // scene "contain" the target.
-                    let sim = sc.similarity(cfg, frame, models, &Ellipse::from_box(&cand)).rho;
+                    let sim = sc.similarity(cfg, frame, models, &Ellipse::from_box(&cand), false).rho;
                     n += 1;
                     s1 += sim;
                     s2 += sim * sim;
@@ -678,7 +685,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             let (rho, sim) = if table.is_some() {
                 self.table.lookup(p.x, p.y)
             } else {
-                let Seen { rho, sim, .. } = self.scratch.similarity(cfg, frame, &target.models, &e);
+                let Seen { rho, sim, .. } = self.scratch.similarity(cfg, frame, &target.models, &e, false);
                 (rho, sim)
             };
             if rho > target.threshold {
@@ -716,7 +723,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         // 4. Estimate the mean state and look at it.
         let mean = mean_state(&self.particles, &self.weights);
         let ellipse = mean.ellipse();
-        let seen_mean = self.scratch.similarity(cfg, frame, &target.models, &ellipse);
+        let seen_mean = self.scratch.similarity(cfg, frame, &target.models, &ellipse, true);
         let confidence = match cfg.boundary {
             Some(b) if g_best > 0 => {
                 let g = (boundary_q(frame, &ellipse) as Real / g_best as Real).min(1.0);
