@@ -664,7 +664,9 @@ impl Support {
     #[inline(always)]
     fn for_each<const K: usize>(&self, lo: usize, hi: usize, mut f: impl FnMut(usize)) {
         let g = Self::group_len::<K>();
-        for (i, &word) in self.words.iter().enumerate() {
+        // Only the words that hold groups (one for an edge model's 17 bins).
+        let used = K.div_ceil(g).div_ceil(32);
+        for (i, &word) in self.words.iter().enumerate().take(used) {
             let mut w = word;
             while w != 0 {
                 let group = 32 * i + w.trailing_zeros() as usize;

@@ -146,6 +146,7 @@ pub fn normal_from_bits(bits: u64) -> Real {
 ///
 /// The four extra fractional bits keep small histogram bins (a single pixel
 /// near the ellipse rim) from being rounded to nothing.
+#[inline]
 pub fn sqrt_q4(x: u32) -> u32 {
     if x < (1 << 24) { isqrt(x << 8) } else { isqrt(x) << 4 }
 }
