@@ -141,13 +141,12 @@ impl<'a> Frame<'a> {
         self.stride
     }
 
-    /// Bytes `lo..hi` of row `y`, for loops that have checked `y` and the
-    /// range against the frame's size themselves (so that a row costs one
-    /// bounds test); `None` if the bytes are not in the buffer.
+    /// The pixel buffer (rows `stride` bytes apart), for loops that have
+    /// checked rows and columns against the frame's size themselves and
+    /// slice it with one bounds test per row.
     #[inline(always)]
-    pub(crate) fn row_bytes(&self, y: usize, lo: usize, hi: usize) -> Option<&'a [u8]> {
-        let start = y.checked_mul(self.stride)?;
-        self.data.get(start.checked_add(lo)?..start.checked_add(hi)?)
+    pub(crate) fn bytes(&self) -> &'a [u8] {
+        self.data
     }
 
     /// The pixel format.

@@ -352,12 +352,13 @@ fn checker_walk<P: PixelRead, const K: usize>(
     if (y_lo as usize) < j0 || y_hi as usize + 1 - j0 > rows {
         return None;
     }
-    // Map row of pixel row y (lattice row j = y), for y in y_lo..=y_hi.
-    let map_row = |y: i32| {
-        // j < rows (checked above), so j·stride is within the map.
-        let j = (y as usize).checked_sub(j0).unwrap_or(rows);
-        bytes.get(j * stride..(j + 1) * stride).unwrap_or(&[])
-    };
+    // Where rows cy − d and cy + d start in the frame's bytes and in the
+    // map (lattice row j = y), moved one row per d. Wrapping: exact for the
+    // rows in y_lo..=y_hi, the only ones read (`cy` may be off the frame).
+    let (fstride, data) = (frame.stride(), frame.bytes());
+    let cy = r.cy as usize;
+    let (mut px_up, mut cells_up) = (cy.wrapping_mul(fstride), cy.wrapping_sub(j0).wrapping_mul(stride));
+    let (mut px_down, mut cells_down) = (px_up, cells_up);
     let mut dx_max = 0u32;
     let mut d = 0u32;
     // Rows past the kernel (r² > one − min_gap) end the walk: r² grows with d.
@@ -400,12 +401,16 @@ fn checker_walk<P: PixelRead, const K: usize>(
             // Rows cy − d and (if d > 0) cy + d.
             let rows = y_lo..=y_hi;
             if rows.contains(&y_up) {
-                checker_row::<P, K>(frame, y_up as usize, &plan, map_row(y_up), counts, edge);
+                let cells = bytes.get(cells_up..cells_up.wrapping_add(stride)).unwrap_or(&[]);
+                checker_row::<P, K>(frame, (y_up as usize, px_up, data), &plan, cells, counts, edge);
             }
             if d > 0 && rows.contains(&y_down) {
-                checker_row::<P, K>(frame, y_down as usize, &plan, map_row(y_down), counts, edge);
+                let cells = bytes.get(cells_down..cells_down.wrapping_add(stride)).unwrap_or(&[]);
+                checker_row::<P, K>(frame, (y_down as usize, px_down, data), &plan, cells, counts, edge);
             }
         }
+        (px_up, cells_up) = (px_up.wrapping_sub(fstride), cells_up.wrapping_sub(stride));
+        (px_down, cells_down) = (px_down.wrapping_add(fstride), cells_down.wrapping_add(stride));
         d += 1;
     }
     Some(edge.iter().take(NIBBLE_NONE as usize + 1).fold(0u32, |a, &c| a.wrapping_add(c)))
@@ -428,11 +433,12 @@ struct RowPlan {
     cells: (usize, usize, usize, usize),
 }
 
-/// One row of [`checker_walk`]: pixel row `y`, map row `cells`.
+/// One row of [`checker_walk`]: pixel row `y`, which starts at byte
+/// `start` of the frame's bytes `data`, and map row `cells`.
 #[inline(always)]
 fn checker_row<P: PixelRead, const K: usize>(
     frame: &Frame<'_>,
-    y: usize,
+    (y, start, data): (usize, usize, &[u8]),
     plan: &RowPlan,
     cells: &[u8],
     counts: &mut [u32; K],
@@ -440,7 +446,7 @@ fn checker_row<P: PixelRead, const K: usize>(
 ) {
     let (base, cols, m0, pairs) = plan.cells;
     if let Some((lo, hi)) = plan.fast
-        && let Some(px) = frame.row_bytes(y, lo, hi).and_then(P::pixels)
+        && let Some(px) = data.get(start + lo..start + hi).and_then(P::pixels)
         && let Some(cell_bytes) = cells.get(m0..m0 + pairs)
     {
         pair_loop::<P, K>(px.as_chunks::<4>().0, cell_bytes, plan.padded, counts, edge);
