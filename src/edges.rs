@@ -373,6 +373,12 @@ impl<const E: usize> EdgeMap<E> {
     }
 }
 
+/// `N` bytes of `row` from `i`, if they are all there.
+#[inline(always)]
+fn window<const N: usize>(row: &[u8], i: usize) -> Option<&[u8; N]> {
+    row.get(i..)?.first_chunk::<N>()
+}
+
 /// What [`ring_cells`] needs besides the ring and the cells' spacing: the
 /// frame width `w`, whether the row is on the frame's border, the number of
 /// orientation bins, the squared threshold, the value of weak cells, and
@@ -416,7 +422,7 @@ fn ring_cells<const XS: usize>(
             return NONE;
         }
         let i = x.wrapping_sub(xa + 1);
-        match (r0.get(i..i + 3), r1.get(i..i + 3), r2.get(i..i + 3)) {
+        match (window::<3>(r0, i), window::<3>(r1, i), window::<3>(r2, i)) {
             (Some(&[a, b, c]), Some(&[d, _, f]), Some(&[g, h, k])) => {
                 let (gx, gy) = sobel([a, b, c, d, 0, f, g, h, k].map(i32::from));
                 classify(gx, gy)
@@ -429,8 +435,10 @@ fn ring_cells<const XS: usize>(
         let both = c + 1 < c1;
         let i = x.wrapping_sub(xa + 1);
         let inner = !border && x >= 1 && both && x + xs + 1 < w;
-        let (va, vb) = match (inner, r0.get(i..i + 5), r1.get(i..i + 5), r2.get(i..i + 5)) {
-            (true, Some(&[t0, t1, t2_, t3, t4]), Some(&[m0, m1, m2, m3, m4]), Some(&[b0, b1, b2, b3, b4])) => {
+        // (An inner pair has x >= 1 and x > xa, so `i` does not wrap.)
+        let windows = if inner { (r0.get(i..i + 5), r1.get(i..i + 5), r2.get(i..i + 5)) } else { (None, None, None) };
+        let (va, vb) = match windows {
+            (Some(&[t0, t1, t2_, t3, t4]), Some(&[m0, m1, m2, m3, m4]), Some(&[b0, b1, b2, b3, b4])) => {
                 let s = |t: u8, m: u8, b: u8| t as i32 + 2 * m as i32 + b as i32;
                 let d = |t: u8, b: u8| b as i32 - t as i32;
                 let (s0, s2) = (s(t0, m0, b0), s(t2_, m2, b2));
