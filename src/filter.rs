@@ -2,7 +2,7 @@
 //! mean-state estimate.
 
 use crate::geometry::Ellipse;
-use crate::scalar::{Real, clamp, normal_from_bits, sqrt, unit_from_bits};
+use crate::scalar::{Real, clamp, max, min, normal_from_bits, sqrt, unit_from_bits};
 use rand_core::Rng;
 
 /// One hypothesis `s = {x, y, vx, vy, Hx, Hy, ȧ}`: the centre of an upright
@@ -218,10 +218,10 @@ pub(crate) fn mean_state<const N: usize>(particles: &[Particle; N], weights: &[R
         m.hx += w * p.hx;
         m.hy += w * p.hy;
         m.a_dot += w * p.a_dot;
-        (lo.x, hi.x) = (lo.x.min(p.x), hi.x.max(p.x));
-        (lo.y, hi.y) = (lo.y.min(p.y), hi.y.max(p.y));
-        (lo.hx, hi.hx) = (lo.hx.min(p.hx), hi.hx.max(p.hx));
-        (lo.hy, hi.hy) = (lo.hy.min(p.hy), hi.hy.max(p.hy));
+        (lo.x, hi.x) = (min(lo.x, p.x), max(hi.x, p.x));
+        (lo.y, hi.y) = (min(lo.y, p.y), max(hi.y, p.y));
+        (lo.hx, hi.hx) = (min(lo.hx, p.hx), max(hi.hx, p.hx));
+        (lo.hy, hi.hy) = (min(lo.hy, p.hy), max(hi.hy, p.hy));
     }
     m.x = clamp(m.x, lo.x, hi.x);
     m.y = clamp(m.y, lo.y, hi.y);
