@@ -677,8 +677,15 @@ impl Support {
             while w != 0 {
                 let group = 32 * i + w.trailing_zeros() as usize;
                 w &= w - 1;
-                for bin in (group * g).max(lo)..((group + 1) * g).min(hi) {
-                    f(bin);
+                if g == 1 {
+                    // One bin per bit (K <= 512, known at compile time).
+                    if (lo..hi).contains(&group) {
+                        f(group);
+                    }
+                } else {
+                    for bin in (group * g).max(lo)..((group + 1) * g).min(hi) {
+                        f(bin);
+                    }
                 }
             }
         }
