@@ -119,10 +119,10 @@ mod tests {
         // coarse grid but apart in a fine one gain n·ln(K/4)-ish likelihood
         // from more cells, far above the penalty with ~2800 samples, so more
         // levels win (at least 4, where the clusters separate).
-        let mut seed = 7u32;
+        let mut next = crate::testing::lcg(7);
         let mut uniform = Vec::new();
         for _ in 0..64 * 64 {
-            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            let seed = next();
             uniform.push([(seed >> 24) as u8, (seed >> 16) as u8, (seed >> 8) as u8]);
         }
         let flat = levels_for(|i| uniform[i]);
@@ -151,11 +151,11 @@ mod tests {
         // half four clusters (→ more), split at the centre pixel.
         let (w, h) = (64usize, 64usize);
         let clusters = [[20u8, 20, 20], [100, 20, 20], [20, 100, 20], [100, 100, 20]];
-        let mut seed = 3u32;
+        let mut next = crate::testing::lcg(3);
         let mut px = Vec::new();
         for y in 0..h {
             for x in 0..w {
-                seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                let seed = next();
                 let c = if x < 32 {
                     [(seed >> 24) as u8, (seed >> 16) as u8, (seed >> 8) as u8]
                 } else {

@@ -641,19 +641,20 @@ mod tests {
         }
     }
 
+    /// [`sobel`] of the 3x3 window of grey levels `l` around `(x, y)`, an
+    /// inner pixel: the per-pixel definition the maps are checked against.
+    fn sobel_at(l: &impl Fn(usize, usize) -> i32, x: usize, y: usize) -> (i32, i32) {
+        let (xs, ys) = ([x - 1, x, x + 1], [y - 1, y, y + 1]);
+        sobel(core::array::from_fn(|i| l(xs[i % 3], ys[i / 3])))
+    }
+
     #[test]
     fn wide_maps_match_direct_sobel_across_column_tiles() {
         // Reason: cross-check of the row-ring fill against the per-pixel
         // definition on a frame wide enough for several column tiles, on
         // both lattices of step 1, in RGB565 (the two-table luma).
         let (w, h) = (431usize, 23usize);
-        let mut seed = 5u32;
-        let px: Vec<u8> = (0..w * h * 2)
-            .map(|_| {
-                seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                (seed >> 24) as u8
-            })
-            .collect();
+        let px = crate::testing::noise_bytes(5, w * h * 2);
         let f = Frame::packed(&px, w, h, PixelFormat::Rgb565).unwrap();
         let l = |x: usize, y: usize| crate::frame::luma(f.rgb(x, y).unwrap()) as i32;
         for sampling in [Sampling::Checkerboard, Sampling::Full] {
@@ -670,17 +671,7 @@ mod tests {
                     let want = if x == 0 || y == 0 || x + 1 >= w || y + 1 >= h {
                         None
                     } else {
-                        let (gx, gy) = sobel([
-                            l(x - 1, y - 1),
-                            l(x, y - 1),
-                            l(x + 1, y - 1),
-                            l(x - 1, y),
-                            0,
-                            l(x + 1, y),
-                            l(x - 1, y + 1),
-                            l(x, y + 1),
-                            l(x + 1, y + 1),
-                        ]);
+                        let (gx, gy) = sobel_at(&l, x, y);
                         Some(if gx * gx + gy * gy < 90 * 90 { 8 } else { orientation_bin(gx, gy, 8) })
                     };
                     assert_eq!(map.bin_at(x, y), want, "{sampling:?} at ({x}, {y})");
@@ -696,31 +687,14 @@ mod tests {
         // random image, at every sampled pixel of several lattices, and
         // against the region walk's own order of cells.
         let (w, h) = (37usize, 29usize);
-        let mut seed = 99u32;
-        let px: Vec<u8> = (0..w * h * 3)
-            .map(|_| {
-                seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                (seed >> 24) as u8
-            })
-            .collect();
+        let px = crate::testing::noise_bytes(99, w * h * 3);
         let f = Frame::packed(&px, w, h, PixelFormat::Rgb888).unwrap();
         let l = |x: usize, y: usize| crate::frame::luma(f.rgb(x, y).unwrap()) as i32;
         let direct = |x: usize, y: usize, bins: usize| {
             if x == 0 || y == 0 || x + 1 >= w || y + 1 >= h {
                 return None;
             }
-            let win = [
-                l(x - 1, y - 1),
-                l(x, y - 1),
-                l(x + 1, y - 1),
-                l(x - 1, y),
-                l(x, y),
-                l(x + 1, y),
-                l(x - 1, y + 1),
-                l(x, y + 1),
-                l(x + 1, y + 1),
-            ];
-            let (gx, gy) = sobel(win);
+            let (gx, gy) = sobel_at(&l, x, y);
             (gx * gx + gy * gy >= 120 * 120).then(|| orientation_bin(gx, gy, bins))
         };
         // 8 bins take 4-bit cells, 16 a byte each.

@@ -444,14 +444,14 @@ fn checker_row<P: PixelRead, const K: usize>(
     counts: &mut [u32; K],
     edge: &mut [u32; MAX_EDGE_BINS],
 ) {
-    let (base, m0, pairs) = plan.cells;
+    let (_, m0, pairs) = plan.cells;
     if let Some((lo, hi)) = plan.fast
         && let Some(px) = data.get(start + lo..start + hi).and_then(P::pixels)
         && let Some(cell_bytes) = cells.get(m0..m0 + pairs)
     {
         pair_loop::<P, K>(px.as_chunks::<4>().0, cell_bytes, plan.padded, counts, edge);
     } else if let Some(row) = frame.row(y) {
-        edge_row::<P, K>(row, y, plan.first, plan.n, plan.start, (cells, base), counts, edge);
+        edge_row::<P, K>(row, y, plan, cells, counts, edge);
     }
 }
 
@@ -460,22 +460,20 @@ fn checker_row<P: PixelRead, const K: usize>(
 /// out of line, to keep the common rows' registers free.
 #[cold]
 #[inline(never)]
-#[allow(clippy::too_many_arguments)]
 fn edge_row<P: PixelRead, const K: usize>(
     row: &[u8],
     y: usize,
-    first: usize,
-    n: usize,
-    (rem, ax, u): (u32, u32, i32),
-    (cells, base): (&[u8], usize),
+    plan: &RowPlan,
+    cells: &[u8],
     counts: &mut [u32; K],
     edge: &mut [u32; MAX_EDGE_BINS],
 ) {
     // Few rows come here (those at the frame's or the map's edge): the
     // indexed loop, with a bounds test per sample, costs the least flash
     // (with the paired loop first, as the general walk has it: +1.2 KB).
-    let span = RowSpan { y, row, x: first, n, dx: 2, kernel: Kernel::start(rem, ax, u, 2) };
-    let cells = RowCells::General { bytes: cells, base, shift: 0, nibbles: true };
+    let (rem, ax, u) = plan.start;
+    let span = RowSpan { y, row, x: plan.first, n: plan.n, dx: 2, kernel: Kernel::start(rem, ax, u, 2) };
+    let cells = RowCells::General { bytes: cells, base: plan.cells.0, shift: 0, nibbles: true };
     indexed_row::<P, K>(&span, &cells, counts, edge);
 }
 
@@ -959,11 +957,8 @@ mod tests {
         // totals, on random RGB565 and GRAY8 scenes, for ellipses inside,
         // across the border, off the frame, tiny and large.
         let (w, h) = (90usize, 70usize);
-        let mut seed = 7u32;
-        let mut next = move || {
-            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            seed >> 8
-        };
+        let mut state = crate::testing::lcg(7);
+        let mut next = move || state() >> 8;
         let rgb: Vec<u8> = (0..w * h * 2).map(|_| next() as u8).collect();
         let grey: Vec<u8> = (0..w * h).map(|_| next() as u8).collect();
         let frames = [
@@ -1088,11 +1083,8 @@ mod tests {
         // kinds: the sums read no other bin. Regions of a random RGB565
         // scene, one after another in the same histogram.
         let (w, h) = (80usize, 60usize);
-        let mut seed = 99u32;
-        let mut next = move || {
-            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-            seed >> 8
-        };
+        let mut state = crate::testing::lcg(99);
+        let mut next = move || state() >> 8;
         let px: Vec<u8> = (0..w * h * 2).map(|_| (next() % 7 * 37) as u8).collect();
         let f = Frame::packed(&px, w, h, PixelFormat::Rgb565).unwrap();
         let layout = Layout::whole(Binning::Rgb8x8x8);

@@ -61,6 +61,8 @@ pub mod meanshift;
 pub mod region;
 pub mod scalar;
 pub(crate) mod table;
+#[cfg(test)]
+mod testing;
 pub mod tracker;
 
 pub use colour::Binning;

@@ -227,10 +227,10 @@ mod tests {
     use crate::region::{Sampling, for_each_in_ellipse};
 
     fn noise(w: usize, h: usize) -> Vec<u8> {
-        let mut seed = 17u32;
+        let mut next = crate::testing::lcg(17);
         (0..w * h * 3)
             .map(|i| {
-                seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                let seed = next();
                 // Smooth-ish colour with noise, so that many bins are in play.
                 ((i % 97) as u32 * 2 + (seed >> 28)) as u8
             })
