@@ -15,7 +15,7 @@ use crate::config::MAX_EDGE_BINS;
 use crate::edges::{EdgeMap, NIBBLE_NONE, RowCells};
 use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
 use crate::geometry::Ellipse;
-use crate::region::{Kernel, Lattice, Raster, RowSpan, Sampling, floor, for_each_row, quadrant, widen};
+use crate::region::{Kernel, Lattice, Raster, RowSpan, Sampling, floor, for_each_row, quadrant, shrink, widen};
 use crate::scalar::{KERNEL_ONE, RADIUS2_SHIFT};
 use crate::scalar::{Real, sqrt_q4};
 
@@ -357,22 +357,34 @@ fn checker_walk<P: PixelRead, const K: usize>(
     // rows in y_lo..=y_hi, the only ones read (`cy` may be off the frame).
     let (fstride, data) = (frame.stride(), frame.bytes());
     let cy = r.cy as usize;
-    let (mut px_up, mut cells_up) = (cy.wrapping_mul(fstride), cy.wrapping_sub(j0).wrapping_mul(stride));
-    let (mut px_down, mut cells_down) = (px_up, cells_up);
+    let (px_centre, cells_centre) = (cy.wrapping_mul(fstride), cy.wrapping_sub(j0).wrapping_mul(stride));
+    // The half width of row d = 0; further rows only narrow it (`shrink`).
     let mut dx_max = 0u32;
-    let mut d = 0u32;
-    // Rows past the kernel (r² > one − min_gap) end the walk: r² grows with d.
-    while let Some(ry2) = d.checked_mul(d).and_then(|dd| dd.checked_mul(r.ay))
-        && let Some(rem) = (one - min_gap).checked_sub(ry2)
-        && d <= r.ry as u32
-    {
-        widen(&mut dx_max, rem, r.ax);
+    widen(&mut dx_max, one - min_gap, r.ax);
+    let px_bytes = core::mem::size_of::<P::Px>();
+    // Rows on the fast path wait in a batch, run by one call: the pixel
+    // loop's registers are set up once per batch, not per row.
+    let mut batch = heapless::Vec::<RowPair, ROW_BATCH>::new();
+    let walk = Walk { data, bytes, px_centre, cells_centre, fstride, stride };
+    // Row cy − d is in y_lo..=y_hi for d in cy − y_hi..=cy − y_lo, row
+    // cy + d for d in y_lo − cy..=y_hi − cy: one unsigned comparison each.
+    let span = (y_hi - y_lo) as u32;
+    let (up_from, down_from) = (r.cy - y_hi, y_lo - r.cy);
+    for d in 0..=r.ry as u32 {
+        // d <= ry <= Hy, so d²·ay <= Hy²·2^24 / Hy² = 2^24: no overflow.
+        // Rows past the kernel (r² > one − min_gap) end the walk: r² grows
+        // with d.
+        let ry2 = d.wrapping_mul(d).wrapping_mul(r.ay);
+        let Some(rem) = (one - min_gap).checked_sub(ry2) else { break };
+        shrink(&mut dx_max, rem, r.ax);
         let half = dx_max as i32;
         let (x_lo, x_hi) = ((r.cx - half).max(0), (r.cx + half).min(width - 1));
         let (y_up, y_down) = (r.cy - d as i32, r.cy + d as i32);
         // The first pixel with x + y even (the same for both rows: they are
         // 2d apart).
         let first = x_lo + ((x_lo ^ y_up) & 1);
+        let up = (d as i32).wrapping_sub(up_from) as u32 <= span;
+        let down = d > 0 && (d as i32).wrapping_sub(down_from) as u32 <= span;
         if first <= x_hi {
             let n = ((x_hi - first) >> 1) as usize + 1;
             // Lattice column of the first sample: (first - (y & 1)) / 2.
@@ -387,71 +399,109 @@ fn checker_walk<P: PixelRead, const K: usize>(
             let pairs = m1.wrapping_sub(m0).wrapping_add(1);
             // The padded samples' pixels must be on the row, and their
             // cells in the map.
-            let px_bytes = core::mem::size_of::<P::Px>();
-            let fast = (base < cols && x0 >= 0 && x0 as usize + 4 * pairs <= width as usize && m0 + pairs <= stride)
-                .then(|| (x0 as usize * px_bytes, (x0 as usize + 4 * pairs) * px_bytes));
-            let plan = RowPlan {
-                fast,
-                padded: Kernel::start(one - ry2, r.ax, x0 - r.cx, 2),
-                first: first as usize,
-                n,
-                start: (one - ry2, r.ax, first - r.cx),
-                cells: (base, m0, pairs),
-            };
-            // Rows cy − d and (if d > 0) cy + d.
-            let rows = y_lo..=y_hi;
-            if rows.contains(&y_up) {
-                let cells = bytes.get(cells_up..cells_up.wrapping_add(stride)).unwrap_or(&[]);
-                checker_row::<P, K>(frame, (y_up as usize, px_up, data), &plan, cells, counts, edge);
-            }
-            if d > 0 && rows.contains(&y_down) {
-                let cells = bytes.get(cells_down..cells_down.wrapping_add(stride)).unwrap_or(&[]);
-                checker_row::<P, K>(frame, (y_down as usize, px_down, data), &plan, cells, counts, edge);
+            if base < cols && x0 >= 0 && x0 as usize + 4 * pairs <= width as usize && m0 + pairs <= stride {
+                let pair = RowPair {
+                    d: d as usize,
+                    sides: up as usize | (down as usize) << 1,
+                    lo: x0 as usize * px_bytes,
+                    m0,
+                    pairs,
+                    kernel: Kernel::start(one - ry2, r.ax, x0 - r.cx, 2),
+                };
+                if batch.is_full() {
+                    fast_rows::<P, K>(&batch, &walk, counts, edge);
+                    batch.clear();
+                }
+                // Not full: the pair is pushed.
+                let _ = batch.push(pair);
+            } else {
+                let plan = RowPlan { first: first as usize, n, start: (one - ry2, r.ax, first - r.cx), base };
+                for (y, on) in [(y_up, up), (y_down, down)] {
+                    let start = (y as usize).wrapping_sub(j0).wrapping_mul(stride);
+                    if on && let Some(row) = frame.row(y as usize) {
+                        let cells = bytes.get(start..start.wrapping_add(stride)).unwrap_or(&[]);
+                        edge_row::<P, K>(row, y as usize, &plan, cells, counts, edge);
+                    }
+                }
             }
         }
-        (px_up, cells_up) = (px_up.wrapping_sub(fstride), cells_up.wrapping_sub(stride));
-        (px_down, cells_down) = (px_down.wrapping_add(fstride), cells_down.wrapping_add(stride));
-        d += 1;
     }
+    fast_rows::<P, K>(&batch, &walk, counts, edge);
     Some(edge.iter().take(NIBBLE_NONE as usize + 1).fold(0u32, |a, &c| a.wrapping_add(c)))
 }
 
-/// What rows `cy − d` and `cy + d` of [`checker_walk`] share.
+/// What [`edge_row`] needs of a row of [`checker_walk`].
 struct RowPlan {
-    /// The byte range of the padded samples' pixels in a row, if they are
-    /// all on it and their cells are all in the map.
-    fast: Option<(usize, usize)>,
-    /// The weights from the first padded sample.
-    padded: Kernel,
     /// The first exact sample and the number of them.
     first: usize,
     n: usize,
     /// [`Kernel::start`]'s arguments for the first exact sample.
     start: (u32, u32, i32),
-    /// The first exact sample's map column, and the padded samples' first
-    /// cell byte and number of bytes.
-    cells: (usize, usize, usize),
+    /// The first exact sample's map column.
+    base: usize,
 }
 
-/// One row of [`checker_walk`]: pixel row `y`, which starts at byte
-/// `start` of the frame's bytes `data`, and map row `cells`.
-#[inline(always)]
-fn checker_row<P: PixelRead, const K: usize>(
-    frame: &Frame<'_>,
-    (y, start, data): (usize, usize, &[u8]),
-    plan: &RowPlan,
-    cells: &[u8],
+/// How many pairs of rows [`checker_walk`] hands [`fast_rows`] at a time.
+const ROW_BATCH: usize = 8;
+
+/// What rows `cy − d` and `cy + d` of [`checker_walk`] share when their
+/// padded samples' pixels and cells are all there.
+#[derive(Copy, Clone, Default)]
+struct RowPair {
+    /// Rows from the centre row.
+    d: usize,
+    /// Which rows are in the region: bit 0 `cy − d`, bit 1 `cy + d`.
+    sides: usize,
+    /// Where the padded samples' pixels start in a row (in bytes), their
+    /// first cell byte in a map row, and their number of pairs.
+    lo: usize,
+    m0: usize,
+    pairs: usize,
+    /// The weights from the first padded sample.
+    kernel: Kernel,
+}
+
+/// What [`fast_rows`] needs of the region: the frame's and the map's
+/// bytes, where the centre row starts in each, and their strides.
+struct Walk<'a> {
+    data: &'a [u8],
+    bytes: &'a [u8],
+    px_centre: usize,
+    cells_centre: usize,
+    fstride: usize,
+    stride: usize,
+}
+
+/// The rows of a batch from [`checker_walk`]; a row whose pixels or cells
+/// are not all in the frame or the map (none is: checked when it was
+/// planned) is skipped. Out of line, so that the pair loop has the
+/// registers to itself (inlined into the walk, it kept half of its state
+/// on the stack).
+#[inline(never)]
+fn fast_rows<P: PixelRead, const K: usize>(
+    batch: &[RowPair],
+    walk: &Walk<'_>,
     counts: &mut [u32; K],
     edge: &mut [u32; MAX_EDGE_BINS],
 ) {
-    let (_, m0, pairs) = plan.cells;
-    if let Some((lo, hi)) = plan.fast
-        && let Some(px) = data.get(start + lo..start + hi).and_then(P::pixels)
-        && let Some(cell_bytes) = cells.get(m0..m0 + pairs)
-    {
-        pair_loop::<P, K>(px.as_chunks::<4>().0, cell_bytes, plan.padded, counts, edge);
-    } else if let Some(row) = frame.row(y) {
-        edge_row::<P, K>(row, y, plan, cells, counts, edge);
+    let chunk = 4 * core::mem::size_of::<P::Px>();
+    for pair in batch {
+        let (dp, dc) = (pair.d.wrapping_mul(walk.fstride), pair.d.wrapping_mul(walk.stride));
+        for (side, px, cells) in [
+            (1, walk.px_centre.wrapping_sub(dp), walk.cells_centre.wrapping_sub(dc)),
+            (2, walk.px_centre.wrapping_add(dp), walk.cells_centre.wrapping_add(dc)),
+        ] {
+            if pair.sides & side == 0 {
+                continue;
+            }
+            let Some(px) = walk.data.get(px.wrapping_add(pair.lo)..) else { continue };
+            let Some(px) = px.get(..pair.pairs.wrapping_mul(chunk)) else { continue };
+            let Some(cells) = walk.bytes.get(cells.wrapping_add(pair.m0)..) else { continue };
+            let Some(cells) = cells.get(..pair.pairs) else { continue };
+            if let Some(px) = P::pixels(px) {
+                pair_loop::<P, K>(px.as_chunks::<4>().0, cells, pair.kernel, counts, edge);
+            }
+        }
     }
 }
 
@@ -473,7 +523,7 @@ fn edge_row<P: PixelRead, const K: usize>(
     // (with the paired loop first, as the general walk has it: +1.2 KB).
     let (rem, ax, u) = plan.start;
     let span = RowSpan { y, row, x: plan.first, n: plan.n, dx: 2, kernel: Kernel::start(rem, ax, u, 2) };
-    let cells = RowCells::General { bytes: cells, base: plan.cells.0, shift: 0, nibbles: true };
+    let cells = RowCells::General { bytes: cells, base: plan.base, shift: 0, nibbles: true };
     indexed_row::<P, K>(&span, &cells, counts, edge);
 }
 

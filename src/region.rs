@@ -233,7 +233,7 @@ fn align_up(from: i32, modulus: usize, phase: usize) -> i32 {
 /// Arithmetic wraps: every `t` that is read lies in `2^16..=2^24`, so the
 /// wrapped values are the exact ones (only the differences past the last
 /// sample, never read, may overflow).
-#[derive(Copy, Clone, Debug)]
+#[derive(Copy, Clone, Debug, Default)]
 pub(crate) struct Kernel {
     t: i32,
     d: i32,
@@ -365,6 +365,15 @@ pub(crate) fn widen(dx_max: &mut u32, rem: u32, ax: u32) {
     }
     while fits(*dx_max + 1) {
         *dx_max += 1;
+    }
+}
+
+/// [`widen`] for a `rem` no larger than the one `dx_max` was widened for
+/// (rows further from the centre): the width can only narrow.
+#[inline(always)]
+pub(crate) fn shrink(dx_max: &mut u32, rem: u32, ax: u32) {
+    while *dx_max > 0 && dx_max.wrapping_mul(*dx_max).wrapping_mul(ax) > rem {
+        *dx_max -= 1;
     }
 }
 
