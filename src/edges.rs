@@ -45,9 +45,15 @@ pub(crate) const NONE: u8 = u8::MAX;
 /// `bins` must be 2, 4, 8 or 16.
 #[inline]
 pub fn orientation_bin(gx: i32, gy: i32, bins: usize) -> usize {
+    orientation_with(gx, gy, bins, 16 / bins.max(2).min(16))
+}
+
+/// [`orientation_bin`] with the step through [`DIRECTIONS`] between bin
+/// boundaries (`16 / bins`) worked out by the caller, once per map.
+#[inline(always)]
+fn orientation_with(gx: i32, gy: i32, bins: usize, stride: usize) -> usize {
     // Orientation is modulo 180°: fold into the upper half plane.
     let (gx, gy) = if gy < 0 || (gy == 0 && gx < 0) { (-gx, -gy) } else { (gx, gy) };
-    let stride = 16 / bins.max(2).min(16);
     // Bin = the number of boundaries at or clockwise of the gradient; the
     // boundaries are sorted by angle, so binary search.
     let (mut lo, mut hi) = (0usize, bins);
@@ -432,6 +438,18 @@ fn ring_cells<const XS: usize>(
     };
     let (mut c, mut x) = (c0, x_first);
     while c < c1 {
+        // A run of checkerboard pairs inside the frame (x − 1 >= 0 and
+        // x + 3 < w for each) goes to the sliding loop.
+        if XS == 2 && nibbles && !border && x >= 1 && x + 4 <= w {
+            let run = ((c1 - c) / 2).min((w - x) / 4);
+            let bytes = out.get_mut(c >> 1..).and_then(|o| o.get_mut(..run)).unwrap_or_default();
+            let done = checker_pairs(bytes, (r0, r1, r2), x.wrapping_sub(xa + 1), cfg);
+            c += 2 * done;
+            x += 4 * done;
+            if c >= c1 {
+                break;
+            }
+        }
         let both = c + 1 < c1;
         let i = x.wrapping_sub(xa + 1);
         let inner = !border && x >= 1 && both && x + xs + 1 < w;
@@ -471,6 +489,44 @@ fn ring_cells<const XS: usize>(
         c += 2;
         x += 2 * xs;
     }
+}
+
+/// Pairs of cells two pixels apart (the checkerboard) into the 4-bit cell
+/// bytes `out`, the first pair's window starting at column `i` of the ring
+/// rows: the same sums as [`ring_cells`]' windows, but each column's sums
+/// taken once, the last column's carried to the next pair, with no bounds
+/// test per pair. Returns the number of pairs done: all of `out`'s, unless
+/// the ring ends first.
+#[inline(always)]
+fn checker_pairs(out: &mut [u8], (r0, r1, r2): (&[u8], &[u8], &[u8]), i: usize, cfg: &SobelCells) -> usize {
+    // The cell's nibble: weak (clamped once here) or its orientation bin
+    // (below 16: at most 16 bins).
+    let (t2, weak, bins) = (cfg.t2, cfg.weak.min(NIBBLE_NONE), cfg.bins);
+    let stride = 16 / bins.max(2).min(16);
+    let classify =
+        |gx: i32, gy: i32| if gx * gx + gy * gy < t2 { weak } else { orientation_with(gx, gy, bins, stride) as u8 };
+    let (Some(&t), Some(&m), Some(&b)) = (r0.get(i), r1.get(i), r2.get(i)) else { return 0 };
+    fn chunks(r: &[u8], from: usize) -> &[[u8; 4]] {
+        r.get(from..).unwrap_or_default().as_chunks::<4>().0
+    }
+    let (tops, mids, bots) = (chunks(r0, i + 1), chunks(r1, i + 1), chunks(r2, i + 1));
+    let s = |t: u8, m: u8, b: u8| t as i32 + 2 * m as i32 + b as i32;
+    let d = |t: u8, b: u8| b as i32 - t as i32;
+    // Column x − 1 of the first pair.
+    let (mut s_prev, mut d_prev) = (s(t, m, b), d(t, b));
+    let mut done = 0;
+    for (((byte, &[t0, t1, t2, t3]), &[_, m1, _, m3]), &[b0, b1, b2, b3]) in
+        out.iter_mut().zip(tops).zip(mids).zip(bots)
+    {
+        // Columns x, x + 1, x + 2, x + 3: cells at x and x + 2.
+        let (d0, s1, d1, d2, s3, d3) = (d(t0, b0), s(t1, m1, b1), d(t1, b1), d(t2, b2), s(t3, m3, b3), d(t3, b3));
+        let va = classify(s1 - s_prev, d_prev + 2 * d0 + d1);
+        let vb = classify(s3 - s1, d1 + 2 * d2 + d3);
+        *byte = va | (vb << 4);
+        (s_prev, d_prev) = (s3, d3);
+        done += 1;
+    }
+    done
 }
 
 /// Writes cell `c` of a map row, in order (an even cell of a 4-bit map
