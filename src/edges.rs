@@ -49,8 +49,9 @@ pub fn orientation_bin(gx: i32, gy: i32, bins: usize) -> usize {
 }
 
 /// [`orientation_bin`] with the step through [`DIRECTIONS`] between bin
-/// boundaries (`16 / bins`) worked out by the caller, once per map.
-#[inline(always)]
+/// boundaries (`16 / bins`) worked out by the caller, once per map. Out of
+/// line: only strong cells come here, and each inlined copy cost flash.
+#[inline(never)]
 fn orientation_with(gx: i32, gy: i32, bins: usize, stride: usize) -> usize {
     // Orientation is modulo 180°: fold into the upper half plane.
     let (gx, gy) = if gy < 0 || (gy == 0 && gx < 0) { (-gx, -gy) } else { (gx, gy) };
@@ -452,7 +453,7 @@ fn ring_cells<const XS: usize>(
         }
         let both = c + 1 < c1;
         let i = x.wrapping_sub(xa + 1);
-        let inner = !border && x >= 1 && both && x + xs + 1 < w;
+        let inner = XS == 1 && !border && x >= 1 && both && x + xs + 1 < w;
         // (An inner pair has x >= 1 and x > xa, so `i` does not wrap.)
         let windows = if inner { (r0.get(i..i + 5), r1.get(i..i + 5), r2.get(i..i + 5)) } else { (None, None, None) };
         let (va, vb) = match windows {
