@@ -245,8 +245,9 @@ pub fn luma([r, g, b]: [u8; 3]) -> u8 {
     ((77 * r as u32 + 150 * g as u32 + 29 * b as u32 + 128) >> 8) as u8
 }
 
-/// `256 ·` [`luma`] of an RGB565 pixel, without the rounding, as the sum
-/// of a part from its low byte (`[0]`) and one from its high byte (`[1]`).
+/// `256 ·` [`luma`] of an RGB565 pixel, with the rounding's 128, as the
+/// sum of a part from its low byte (`[0]`, which carries the 128) and one
+/// from its high byte (`[1]`).
 /// The expanded channels are `R8 = f(hi)`, `B8 = f(lo)` and
 /// `G8 = 32·(hi & 7) + ((hi & 7) >> 1) + 4·(lo >> 5)` (the bit replication
 /// of the 6-bit green splits the same way), so `77·R8 + 150·G8 + 29·B8`
@@ -264,7 +265,7 @@ const fn rgb565_luma_tables() -> [[u16; 256]; 2] {
         let b5 = (i & 0x1f) as u32;
         let b8 = (b5 << 3) | (b5 >> 2);
         let g_lo = 4 * (i as u32 >> 5);
-        t[0][i] = (150 * g_lo + 29 * b8) as u16;
+        t[0][i] = (150 * g_lo + 29 * b8 + 128) as u16;
         let r5 = (i >> 3) as u32;
         let r8 = (r5 << 3) | (r5 >> 2);
         let g_hi = 32 * (i as u32 & 7) + ((i as u32 & 7) >> 1);
@@ -334,7 +335,7 @@ impl PixelRead for Rgb565 {
         let [lo_part, hi_part] = &RGB565_LUMA;
         // A byte indexes a 256-entry table: the compiler drops these checks.
         let sum = lo_part.get(lo as usize).map_or(0, |&v| v as u32) + hi_part.get(hi as usize).map_or(0, |&v| v as u32);
-        ((sum + 128) >> 8) as u8
+        (sum >> 8) as u8
     }
 
     #[inline(always)]
