@@ -365,7 +365,10 @@ fn checker_walk<P: PixelRead, const K: usize>(
     // Rows on the fast path wait in a batch, run by one call: the pixel
     // loop's registers are set up once per batch, not per row.
     let mut batch = heapless::Vec::<RowPair, ROW_BATCH>::new();
-    let walk = Walk { data, bytes, px_centre, cells_centre, fstride, stride };
+    // Where rows cy − d and cy + d start in the frame and the map, moved
+    // one row per d (wrapping: exact for the rows read).
+    let (mut px_up, mut cells_up) = (px_centre, cells_centre);
+    let (mut px_down, mut cells_down) = (px_centre, cells_centre);
     // Row cy − d is in y_lo..=y_hi for d in cy − y_hi..=cy − y_lo, row
     // cy + d for d in y_lo − cy..=y_hi − cy: one unsigned comparison each.
     let span = (y_hi - y_lo) as u32;
@@ -400,16 +403,19 @@ fn checker_walk<P: PixelRead, const K: usize>(
             // The padded samples' pixels must be on the row, and their
             // cells in the map.
             if base < cols && x0 >= 0 && x0 as usize + 4 * pairs <= width as usize && m0 + pairs <= stride {
+                let lo = x0 as usize * px_bytes;
+                // A row outside the region gets offsets past any slice.
+                let row = |on: bool, px: usize, cells: usize| match on {
+                    true => (px.wrapping_add(lo), cells.wrapping_add(m0)),
+                    false => (usize::MAX, usize::MAX),
+                };
                 let pair = RowPair {
-                    d: d as usize,
-                    sides: up as usize | (down as usize) << 1,
-                    lo: x0 as usize * px_bytes,
-                    m0,
+                    rows: [row(up, px_up, cells_up), row(down, px_down, cells_down)],
                     pairs,
                     kernel: Kernel::start(one - ry2, r.ax, x0 - r.cx, 2),
                 };
                 if batch.is_full() {
-                    fast_rows::<P, K>(&batch, &walk, counts, edge);
+                    fast_rows::<P, K>(&batch, (data, bytes), counts, edge);
                     batch.clear();
                 }
                 // Not full: the pair is pushed.
@@ -425,8 +431,10 @@ fn checker_walk<P: PixelRead, const K: usize>(
                 }
             }
         }
+        (px_up, cells_up) = (px_up.wrapping_sub(fstride), cells_up.wrapping_sub(stride));
+        (px_down, cells_down) = (px_down.wrapping_add(fstride), cells_down.wrapping_add(stride));
     }
-    fast_rows::<P, K>(&batch, &walk, counts, edge);
+    fast_rows::<P, K>(&batch, (data, bytes), counts, edge);
     Some(edge.iter().take(NIBBLE_NONE as usize + 1).fold(0u32, |a, &c| a.wrapping_add(c)))
 }
 
@@ -444,32 +452,18 @@ struct RowPlan {
 /// How many pairs of rows [`checker_walk`] hands [`fast_rows`] at a time.
 const ROW_BATCH: usize = 8;
 
-/// What rows `cy − d` and `cy + d` of [`checker_walk`] share when their
-/// padded samples' pixels and cells are all there.
+/// Rows `cy − d` and `cy + d` of [`checker_walk`] when their padded
+/// samples' pixels and cells are all there.
 #[derive(Copy, Clone, Default)]
 struct RowPair {
-    /// Rows from the centre row.
-    d: usize,
-    /// Which rows are in the region: bit 0 `cy − d`, bit 1 `cy + d`.
-    sides: usize,
-    /// Where the padded samples' pixels start in a row (in bytes), their
-    /// first cell byte in a map row, and their number of pairs.
-    lo: usize,
-    m0: usize,
+    /// Where each row's padded samples' pixels start in the frame's bytes
+    /// and their cells in the map's (`usize::MAX` for a row outside the
+    /// region).
+    rows: [(usize, usize); 2],
+    /// Number of pairs of samples (four-pixel chunks and cell bytes).
     pairs: usize,
     /// The weights from the first padded sample.
     kernel: Kernel,
-}
-
-/// What [`fast_rows`] needs of the region: the frame's and the map's
-/// bytes, where the centre row starts in each, and their strides.
-struct Walk<'a> {
-    data: &'a [u8],
-    bytes: &'a [u8],
-    px_centre: usize,
-    cells_centre: usize,
-    fstride: usize,
-    stride: usize,
 }
 
 /// The rows of a batch from [`checker_walk`]; a row whose pixels or cells
@@ -480,23 +474,16 @@ struct Walk<'a> {
 #[inline(never)]
 fn fast_rows<P: PixelRead, const K: usize>(
     batch: &[RowPair],
-    walk: &Walk<'_>,
+    (data, bytes): (&[u8], &[u8]),
     counts: &mut [u32; K],
     edge: &mut [u32; MAX_EDGE_BINS],
 ) {
     let chunk = 4 * core::mem::size_of::<P::Px>();
     for pair in batch {
-        let (dp, dc) = (pair.d.wrapping_mul(walk.fstride), pair.d.wrapping_mul(walk.stride));
-        for (side, px, cells) in [
-            (1, walk.px_centre.wrapping_sub(dp), walk.cells_centre.wrapping_sub(dc)),
-            (2, walk.px_centre.wrapping_add(dp), walk.cells_centre.wrapping_add(dc)),
-        ] {
-            if pair.sides & side == 0 {
-                continue;
-            }
-            let Some(px) = walk.data.get(px.wrapping_add(pair.lo)..) else { continue };
+        for &(px, cells) in &pair.rows {
+            let Some(px) = data.get(px..) else { continue };
             let Some(px) = px.get(..pair.pairs.wrapping_mul(chunk)) else { continue };
-            let Some(cells) = walk.bytes.get(cells.wrapping_add(pair.m0)..) else { continue };
+            let Some(cells) = bytes.get(cells..) else { continue };
             let Some(cells) = cells.get(..pair.pairs) else { continue };
             if let Some(px) = P::pixels(px) {
                 pair_loop::<P, K>(px.as_chunks::<4>().0, cells, pair.kernel, counts, edge);
