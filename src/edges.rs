@@ -42,33 +42,38 @@ pub(crate) const NONE: u8 = u8::MAX;
 
 /// The orientation bin of gradient `(gx, gy)` among `bins` equal sectors of
 /// 0–180°, by sector tests with integer cross products (no `atan`).
-/// `bins` must be 2, 4, 8 or 16.
+/// `bins` must be 2, 4, 8 or 16 (another count acts as the power of two
+/// below it, and 0 as 1).
 #[inline]
 pub fn orientation_bin(gx: i32, gy: i32, bins: usize) -> usize {
-    orientation_with(gx, gy, bins, 16 / bins.max(2).min(16))
+    orientation_with(gx, gy, sector_shift(bins))
 }
 
-/// [`orientation_bin`] with the step through [`DIRECTIONS`] between bin
-/// boundaries (`16 / bins`) worked out by the caller, once per map. Out of
-/// line: only strong cells come here, and each inlined copy cost flash.
+/// `log2` of the [`DIRECTIONS`] per sector for `bins` sectors.
+fn sector_shift(bins: usize) -> u32 {
+    4 - bins.clamp(1, 16).ilog2()
+}
+
+/// [`orientation_bin`] with [`sector_shift`] worked out by the caller, once
+/// per map. Out of line: only strong cells come here, and each inlined copy
+/// cost flash.
 #[inline(never)]
-fn orientation_with(gx: i32, gy: i32, bins: usize, stride: usize) -> usize {
+fn orientation_with(gx: i32, gy: i32, shift: u32) -> usize {
     // Orientation is modulo 180°: fold into the upper half plane.
     let (gx, gy) = if gy < 0 || (gy == 0 && gx < 0) { (-gx, -gy) } else { (gx, gy) };
     // Bin = the number of boundaries at or clockwise of the gradient; the
-    // boundaries are sorted by angle, so binary search.
-    let (mut lo, mut hi) = (0usize, bins);
-    while hi - lo > 1 {
-        let mid = (lo + hi) / 2;
-        let (c, s) = DIRECTIONS.get(mid * stride).copied().unwrap_or((0, 0));
+    // boundaries are sorted by angle, so binary search: halve a range of
+    // directions, from all 16, down to one sector (`1 << shift` of them).
+    let (mut lo, mut half) = (0usize, 8usize);
+    while half >= 1 << shift {
+        let (c, s) = DIRECTIONS.get(lo + half).copied().unwrap_or((0, 0));
         // cross(boundary, g) >= 0  <=>  g is at or past the boundary.
         if c * gy - s * gx >= 0 {
-            lo = mid;
-        } else {
-            hi = mid;
+            lo += half;
         }
+        half >>= 1;
     }
-    lo
+    lo >> shift
 }
 
 /// How an [`EdgeMap`] is computed.
@@ -509,9 +514,8 @@ fn checker_pairs(out: &mut [u8], (r0, r1, r2): (&[u8], &[u8], &[u8]), i: usize, 
     // The cell's nibble: weak (clamped once here) or its orientation bin
     // (below 16: at most 16 bins).
     let (t2, weak, bins) = (cfg.t2, cfg.weak.min(NIBBLE_NONE), cfg.bins);
-    let stride = 16 / bins.max(2).min(16);
-    let classify =
-        |gx: i32, gy: i32| if gx * gx + gy * gy < t2 { weak } else { orientation_with(gx, gy, bins, stride) as u8 };
+    let shift = sector_shift(bins);
+    let classify = |gx: i32, gy: i32| if gx * gx + gy * gy < t2 { weak } else { orientation_with(gx, gy, shift) as u8 };
     let (Some(&t), Some(&m), Some(&b)) = (r0.get(i), r1.get(i), r2.get(i)) else { return 0 };
     fn chunks(r: &[u8], from: usize) -> &[[u8; 4]] {
         r.get(from..).unwrap_or_default().as_chunks::<4>().0
