@@ -66,7 +66,8 @@ fn orientation_with(gx: i32, gy: i32, shift: u32) -> usize {
     // directions, from all 16, down to one sector (`1 << shift` of them).
     let (mut lo, mut half) = (0usize, 8usize);
     while half >= 1 << shift {
-        let (c, s) = DIRECTIONS.get(lo + half).copied().unwrap_or((0, 0));
+        // lo + half < 16; the mask spares a bounds test.
+        let (c, s) = DIRECTIONS.get((lo + half) & 15).copied().unwrap_or((0, 0));
         // cross(boundary, g) >= 0  <=>  g is at or past the boundary.
         if c * gy - s * gx >= 0 {
             lo += half;

@@ -359,7 +359,7 @@ fn checker_walk<P: PixelRead, const K: usize>(
     let cy = r.cy as usize;
     let (px_centre, cells_centre) = (cy.wrapping_mul(fstride), cy.wrapping_sub(j0).wrapping_mul(stride));
     // The half width of row d = 0; further rows only narrow it (`shrink`).
-    let mut dx_max = 0u32;
+    let mut dx_max = r.rx;
     widen(&mut dx_max, one - min_gap, r.ax);
     let px_bytes = core::mem::size_of::<P::Px>();
     // Rows on the fast path wait in a batch, run by one call: the pixel

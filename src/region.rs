@@ -177,6 +177,9 @@ pub(crate) struct Raster {
     pub ay: u32,
     /// Largest row offset.
     pub ry: i32,
+    /// `⌊Hx⌋`: where [`widen`] can start the centre row's half width (a
+    /// step or so from it).
+    pub rx: u32,
 }
 
 impl Raster {
@@ -201,6 +204,7 @@ impl Raster {
             ax: (one / (hx * hx)) as u32,
             ay: (one / (hy * hy)) as u32,
             ry: hy as i32,
+            rx: hx as u32,
         })
     }
 }
@@ -354,7 +358,8 @@ pub(crate) fn for_each_row<F: FnMut(RowSpan<'_>)>(frame: &Frame<'_>, e: &Ellipse
 /// `isqrt(rem / ax)`), walking from the previous row's width: a row's width
 /// differs little from its neighbour's, so this is cheaper than a square
 /// root. In 32 bits: `ax <= 2^26` (half axes >= 0.5), the walk starts from
-/// a width whose `dx²·ax` fitted an earlier row's `rem` (< 2^24), and each
+/// a width whose `dx²·ax` fitted an earlier row's `rem` (< 2^24), or from
+/// [`Raster::rx`] (`⌊Hx⌋²·ax <= Hx²·2^24 / Hx² = 2^24`), and each
 /// step up tests `(d + 1)²·ax <= 4·d²·ax <= 2^26` for `d >= 1`, so no
 /// product reaches 2^32.
 #[inline(always)]
