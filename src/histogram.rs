@@ -15,7 +15,9 @@ use crate::config::MAX_EDGE_BINS;
 use crate::edges::{EdgeMap, NIBBLE_NONE, RowCells};
 use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
 use crate::geometry::Ellipse;
-use crate::region::{Kernel, Lattice, Raster, RowSpan, Sampling, floor, for_each_row, quadrant, shrink, widen};
+use crate::region::{
+    Kernel, Lattice, PairKernel, Raster, RowSpan, Sampling, floor, for_each_row, quadrant, shrink, widen,
+};
 use crate::scalar::{KERNEL_ONE, RADIUS2_SHIFT};
 use crate::scalar::{Real, sqrt_q4};
 
@@ -573,14 +575,16 @@ fn paired_row<P: PixelRead, const K: usize>(
 fn pair_loop<P: PixelRead, const K: usize>(
     quads: &[[P::Px; 4]],
     bytes: &[u8],
-    mut kernel: Kernel,
+    kernel: Kernel,
     counts: &mut [u32; K],
     edge: &mut [u32; MAX_EDGE_BINS],
 ) {
+    let mut kernel = PairKernel::new(kernel);
     for (q, &b) in quads.iter().zip(bytes) {
         let [p0, _, p1, _] = *q;
-        take(P::px_8x8x8(p0), b & 0x0f, kernel.next_weight_or_zero(), counts, edge);
-        take(P::px_8x8x8(p1), b >> 4, kernel.next_weight_or_zero(), counts, edge);
+        let (w0, w1) = kernel.next_pair_or_zero();
+        take(P::px_8x8x8(p0), b & 0x0f, w0, counts, edge);
+        take(P::px_8x8x8(p1), b >> 4, w1, counts, edge);
     }
 }
 
