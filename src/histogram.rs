@@ -488,7 +488,7 @@ fn fast_rows<P: PixelRead, const K: usize>(
             let Some(cells) = bytes.get(cells..) else { continue };
             let Some(cells) = cells.get(..pair.pairs) else { continue };
             if let Some(px) = P::pixels(px) {
-                pair_loop::<P, K>(px.as_chunks::<4>().0, cells, pair.kernel, counts, edge);
+                pair_loop::<P, K>(counts, edge, px.as_chunks::<4>().0, cells, pair.kernel);
             }
         }
     }
@@ -573,11 +573,11 @@ fn paired_row<P: PixelRead, const K: usize>(
 /// state on the stack).
 #[inline(never)]
 fn pair_loop<P: PixelRead, const K: usize>(
+    counts: &mut [u32; K],
+    edge: &mut [u32; MAX_EDGE_BINS],
     quads: &[[P::Px; 4]],
     bytes: &[u8],
     kernel: Kernel,
-    counts: &mut [u32; K],
-    edge: &mut [u32; MAX_EDGE_BINS],
 ) {
     let mut kernel = PairKernel::new(kernel);
     for (q, &b) in quads.iter().zip(bytes) {
