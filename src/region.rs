@@ -237,7 +237,7 @@ fn align_up(from: i32, modulus: usize, phase: usize) -> i32 {
 /// Arithmetic wraps: every `t` that is read lies in `2^16..=2^24`, so the
 /// wrapped values are the exact ones (only the differences past the last
 /// sample, never read, may overflow).
-#[derive(Copy, Clone, Debug, Default)]
+#[derive(Copy, Clone, Debug)]
 pub(crate) struct Kernel {
     t: i32,
     d: i32,
