@@ -563,8 +563,8 @@ fn put(row: &mut [u8], c: usize, v: u8, nibbles: bool) {
 #[inline(always)]
 fn cell(bytes: &[u8], c: usize, nibbles: bool) -> u8 {
     if nibbles {
-        // NIBBLE_NONE for no bin, as the paired loops read it: in 4-bit
-        // maps every sample lands in an edge bin (see `histogram::take`).
+        // NIBBLE_NONE for no bin, as the pair loop reads it: in 4-bit maps
+        // every sample lands in an edge bin (see `histogram::take`).
         bytes.get(c >> 1).map_or(NIBBLE_NONE, |b| (b >> ((c & 1) * 4)) & 0x0f)
     } else {
         bytes.get(c).copied().unwrap_or(NONE)
@@ -572,40 +572,27 @@ fn cell(bytes: &[u8], c: usize, nibbles: bool) -> u8 {
 }
 
 /// The cells a row of samples reads, from [`EdgeMap::row_cells`].
-pub(crate) enum RowCells<'a> {
-    /// A map row of 4-bit cells at full lattice resolution: sample `i`
-    /// reads cell `first + i`.
-    Nibbles {
-        /// The map row.
-        bytes: &'a [u8],
-        /// The first sample's cell.
-        first: usize,
-    },
-    /// Sample `i` reads cell `(base + i) >> shift` (wrapping: cells left
-    /// of the map are huge indices, past the row).
-    General {
-        /// The map row.
-        bytes: &'a [u8],
-        /// The first sample's lattice column, relative to the map's first.
-        base: usize,
-        /// Lattice columns per cell, as a power of two.
-        shift: u32,
-        /// Whether cells take 4 bits.
-        nibbles: bool,
-    },
+pub(crate) struct RowCells<'a> {
+    /// The map row.
+    pub bytes: &'a [u8],
+    /// The first sample's lattice column, relative to the map's first.
+    pub base: usize,
+    /// Lattice columns per cell, as a power of two.
+    pub shift: u32,
+    /// Whether cells take 4 bits.
+    pub nibbles: bool,
 }
 
 impl RowCells<'_> {
     /// No map: every sample reads [`NONE`].
-    pub(crate) const EMPTY: RowCells<'static> = RowCells::General { bytes: &[], base: 0, shift: 0, nibbles: false };
+    pub(crate) const EMPTY: RowCells<'static> = RowCells { bytes: &[], base: 0, shift: 0, nibbles: false };
 
-    /// The cell of sample `i`: its bin, or none as [`cell`] says it.
+    /// The cell of sample `i`, which reads cell `(base + i) >> shift`
+    /// (wrapping: cells left of the map are huge indices, past the row):
+    /// its bin, or none as [`cell`] says it.
     #[inline(always)]
     pub(crate) fn get(&self, i: usize) -> u8 {
-        match *self {
-            RowCells::Nibbles { bytes, first } => cell(bytes, first.wrapping_add(i), true),
-            RowCells::General { bytes, base, shift, nibbles } => cell(bytes, base.wrapping_add(i) >> shift, nibbles),
-        }
+        cell(self.bytes, self.base.wrapping_add(i) >> self.shift, self.nibbles)
     }
 }
 
@@ -617,12 +604,7 @@ impl<const E: usize> EdgeMap<E> {
         let l = &self.lattice;
         let bytes = self.lattice_row(div_small(span.y as u32, l.step() as u32) as usize);
         let k = div_small(span.x.wrapping_sub(l.phase(span.y)) as u32, l.x_step() as u32) as usize;
-        let base = k.wrapping_sub(self.k0);
-        if self.nibbles && self.shift == 0 && base < self.cols {
-            RowCells::Nibbles { bytes, first: base }
-        } else {
-            RowCells::General { bytes, base, shift: self.shift, nibbles: self.nibbles }
-        }
+        RowCells { bytes, base: k.wrapping_sub(self.k0), shift: self.shift, nibbles: self.nibbles }
     }
 }
 

@@ -207,8 +207,8 @@ impl<const K: usize> Histogram<K> {
             });
             self.total = total;
         }
-        // The paired loop drops the weight of cells with no bin into the
-        // nibble form's "none" bin, which no orientation uses (see `take`).
+        // 4-bit maps drop the weight of cells with no bin into the nibble
+        // form's "none" bin, which no orientation uses (see `take`).
         if map.is_some_and(|m| m.nibbles())
             && let Some(c) = edge.counts.get_mut(NIBBLE_NONE as usize)
         {
@@ -308,15 +308,10 @@ fn general_walk<P: PixelRead, const K: usize, const E: usize>(
 ) -> u32 {
     let mut total = 0u32;
     for_each_row(frame, e, lattice, |span| {
+        // The default checkerboard takes `checker_walk`; what comes here
+        // (other lattices, regions past the map) shares one indexed loop.
         let cells = row_cells(map, &span);
-        // Rows of 4-bit cells at full resolution two pixels apart have a
-        // loop with no bounds test per sample; the rest share an indexed one.
-        let paired = match cells {
-            RowCells::Nibbles { bytes, first } => paired_row::<P, K>(&span, bytes, first, counts, edge),
-            RowCells::General { .. } => None,
-        };
-        let row_total = paired.unwrap_or_else(|| indexed_row::<P, K>(&span, &cells, counts, edge));
-        total = total.wrapping_add(row_total);
+        total = total.wrapping_add(indexed_row::<P, K>(&span, &cells, counts, edge));
     });
     total
 }
@@ -507,63 +502,11 @@ fn edge_row<P: PixelRead, const K: usize>(
     edge: &mut [u32; MAX_EDGE_BINS],
 ) {
     // Few rows come here (those at the frame's or the map's edge): the
-    // indexed loop, with a bounds test per sample, costs the least flash
-    // (with the paired loop first, as the general walk has it: +1.2 KB).
+    // indexed loop, with a bounds test per sample, costs the least flash.
     let (rem, ax, u) = plan.start;
     let span = RowSpan { y, row, x: plan.first, n: plan.n, dx: 2, kernel: Kernel::start(rem, ax, u, 2) };
-    let cells = RowCells::General { bytes: cells, base: plan.base, shift: 0, nibbles: true };
+    let cells = RowCells { bytes: cells, base: plan.base, shift: 0, nibbles: true };
     indexed_row::<P, K>(&span, &cells, counts, edge);
-}
-
-/// The per-pixel loop of a checkerboard row (samples two pixels apart)
-/// whose samples read consecutive 4-bit cells from cell `first` of
-/// `bytes`: two samples per cell byte and per four-pixel chunk, zipped, so
-/// nothing is bounds-tested per sample; the odd sample at either end goes
-/// alone. `None` (before any work) if the row is not such a row. Returns
-/// the row's colour mass.
-#[inline(always)]
-fn paired_row<P: PixelRead, const K: usize>(
-    span: &RowSpan<'_>,
-    bytes: &[u8],
-    first: usize,
-    counts: &mut [u32; K],
-    edge: &mut [u32; MAX_EDGE_BINS],
-) -> Option<u32> {
-    if span.dx != 2 {
-        return None;
-    }
-    let px = P::pixels(span.row)?;
-    let n = span.n;
-    // A sample on an odd cell goes first, alone; then pairs as long as
-    // their four-pixel chunks are on the row; the rest alone.
-    let head = (first & 1).min(n);
-    let start = span.x.checked_add(2 * head)?;
-    let pairs = ((n - head) / 2).min(px.len().saturating_sub(start) / 4);
-    let quads = px.get(start..start + 4 * pairs)?.as_chunks::<4>().0;
-    let b0 = (first + head) >> 1;
-    let pair_bytes = bytes.get(b0..b0 + pairs)?;
-    let mut kernel = span.kernel;
-    let mut total = 0u32;
-    let mut alone = |i: usize, kernel: &mut Kernel, counts: &mut [u32; K], edge: &mut [u32; MAX_EDGE_BINS]| {
-        let w = kernel.next_weight();
-        if let Some(&p) = px.get(span.x + 2 * i) {
-            let cell = bytes.get((first + i) >> 1).map_or(NIBBLE_NONE, |b| (b >> (((first + i) & 1) * 4)) & 0x0f);
-            total = total.wrapping_add(take(P::px_8x8x8(p), cell, w, counts, edge));
-        }
-    };
-    if head == 1 {
-        alone(0, &mut kernel, counts, edge);
-    }
-    let mut pair_total = 0u32;
-    for (q, &b) in quads.iter().zip(pair_bytes) {
-        let [p0, _, p1, _] = *q;
-        pair_total = pair_total.wrapping_add(take(P::px_8x8x8(p0), b & 0x0f, kernel.next_weight(), counts, edge));
-        pair_total = pair_total.wrapping_add(take(P::px_8x8x8(p1), b >> 4, kernel.next_weight(), counts, edge));
-    }
-    for i in head + 2 * pairs..n {
-        alone(i, &mut kernel, counts, edge);
-    }
-    Some(total.wrapping_add(pair_total))
 }
 
 /// Two samples per cell byte and per four-pixel chunk, weights clamped to 0
