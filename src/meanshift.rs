@@ -320,9 +320,13 @@ impl<const K: usize> MeanShift<K> {
             for k in kalman.iter_mut() {
                 k.predict(process);
             }
-            start.cx = clamp(kalman[0].p, 0.0, size.0 as Real - 1.0);
-            start.cy = clamp(kalman[1].p, 0.0, size.1 as Real - 1.0);
+            (start.cx, start.cy) = (kalman[0].p, kalman[1].p);
         }
+        // The climb keeps the centre on the frame, and so must its start: a
+        // box may overlap the frame only partly, and a prediction may run
+        // off it (a climb that finds none of the model stays where it began).
+        start.cx = clamp(start.cx, 0.0, size.0 as Real - 1.0);
+        start.cy = clamp(start.cy, 0.0, size.1 as Real - 1.0);
         scratch.iterations = 0;
         let mut best = scratch.climb(&cfg, frame, &t.model, start);
         if cfg.scale_step > 0.0 {
@@ -561,6 +565,29 @@ mod tests {
             assert_eq!(states[1].state, TrackState::Tracking);
             assert_eq!(states[2].state, TrackState::Lost);
             assert_eq!(states[2].event, Some(Event::LostTarget));
+        }
+    }
+
+    #[test]
+    fn estimates_stay_on_the_frame_when_the_box_was_partly_off_it() {
+        // Reason: the estimate's centre is always a point of the frame
+        // (0..=w-1, 0..=h-1). A box may hang off the frame; its centre here
+        // is at y = 10 in a 10-row frame. On a frame with none of the model's
+        // colours the climb cannot move, so the estimate is where the climb
+        // started: that start must be on the frame (found by the fuzzer,
+        // which saw the centre stay off it).
+        let (w, h) = (24usize, 10usize);
+        let first = blob(w, h, 12.0, 9.0, 4.0);
+        let grey = vec![90u8; w * h * 3];
+        for cfg in [MeanShiftConfig::default(), MeanShiftConfig::kalman()] {
+            let mut ms: MeanShift = MeanShift::new(cfg).unwrap();
+            let init = ms
+                .init(&Frame::packed(&first, w, h, PixelFormat::Rgb888).unwrap(), BoundingBox::new(8.0, 6.0, 8.0, 8.0));
+            assert_eq!(init.unwrap().ellipse.cy, 10.0);
+            for _ in 0..3 {
+                let e = ms.step(&Frame::packed(&grey, w, h, PixelFormat::Rgb888).unwrap()).unwrap().ellipse;
+                assert!((0.0..=(w - 1) as f32).contains(&e.cx) && (0.0..=(h - 1) as f32).contains(&e.cy), "{e:?}");
+            }
         }
     }
 
