@@ -398,6 +398,23 @@ fn window<const N: usize>(row: &[u8], i: usize) -> Option<&[u8; N]> {
     row.get(i..)?.first_chunk::<N>()
 }
 
+/// A cell's value from its Sobel gradient: `weak` below the squared
+/// threshold `t2`, else its orientation bin ([`sector_shift`] of the bin
+/// count worked out once).
+#[derive(Copy, Clone)]
+struct Classify {
+    t2: i32,
+    weak: u8,
+    shift: u32,
+}
+
+impl Classify {
+    #[inline(always)]
+    fn of(self, gx: i32, gy: i32) -> u8 {
+        if gx * gx + gy * gy < self.t2 { self.weak } else { orientation_with(gx, gy, self.shift) as u8 }
+    }
+}
+
 /// What [`ring_cells`] needs besides the ring and the cells' spacing: the
 /// frame width `w`, whether the row is on the frame's border, the number of
 /// orientation bins, the squared threshold, the value of weak cells, and
@@ -417,14 +434,15 @@ struct SobelCells {
 /// `D = bottom − top`, so `gx = S(x+1) − S(x−1)` and
 /// `gy = D(x−1) + 2·D(x) + D(x+1)`, the same integers as [`sobel`]); a
 /// pair of cells fills one byte of a 4-bit map. Cells one pixel apart go
-/// two at a time from one five-column window per ring row (they share two
+/// two at a time from one four-column window per ring row (they share two
 /// columns); checkerboard cells of a 4-bit map, two pixels apart, go in
 /// runs through [`checker_pairs`], which carries each pair's last column
 /// to the next. Cells at the frame's border, a last cell alone, and the
 /// checkerboard cells of byte maps go one cell at a time. Out of line and
 /// shared by every pixel format; compiled per cell spacing `XS` (1 or 2
-/// pixels), which fixes the window's columns (measured on the QVGA audit:
-/// 40 k instructions per frame less than with the spacing at run time).
+/// pixels), so that each copy holds only its own loop (measured on the QVGA
+/// audit in session 4: 40 k instructions per frame less than with the
+/// spacing at run time).
 #[inline(never)]
 fn ring_cells<const XS: usize>(
     out: &mut [u8],
@@ -435,9 +453,8 @@ fn ring_cells<const XS: usize>(
     cfg: &SobelCells,
 ) {
     let SobelCells { w, border, bins, t2, weak, nibbles } = *cfg;
-    let xs = XS;
-    let shift = sector_shift(bins);
-    let classify = |gx: i32, gy: i32| if gx * gx + gy * gy < t2 { weak } else { orientation_with(gx, gy, shift) as u8 };
+    let class = Classify { t2, weak, shift: sector_shift(bins) };
+    let classify = |gx: i32, gy: i32| class.of(gx, gy);
     // One cell, with every test (the frame border, the window's pixels).
     let single = |x: usize| {
         if border || x == 0 || x + 1 >= w {
@@ -459,7 +476,10 @@ fn ring_cells<const XS: usize>(
         if XS == 2 && nibbles && !border && x >= 1 && x + 4 <= w {
             let run = ((c1 - c) / 2).min((w - x) / 4);
             let bytes = out.get_mut(c >> 1..).and_then(|o| o.get_mut(..run)).unwrap_or_default();
-            let done = checker_pairs(bytes, (r0, r1, r2), x.wrapping_sub(xa + 1), cfg);
+            // Weak cells' value clamped to a nibble once (orientation bins
+            // are below 16: at most 16 bins).
+            let nibble = Classify { weak: weak.min(NIBBLE_NONE), ..class };
+            let done = checker_pairs(bytes, (r0, r1, r2), x.wrapping_sub(xa + 1), nibble);
             c += 2 * done;
             x += 4 * done;
             if c >= c1 {
@@ -468,24 +488,22 @@ fn ring_cells<const XS: usize>(
         }
         let both = c + 1 < c1;
         let i = x.wrapping_sub(xa + 1);
-        let inner = XS == 1 && !border && x >= 1 && both && x + xs + 1 < w;
+        // Cells one pixel apart share a window (checkerboard cells that
+        // come here go one at a time).
+        let inner = XS == 1 && !border && x >= 1 && both && x + 2 < w;
         // (An inner pair has x >= 1 and x > xa, so `i` does not wrap.)
-        let windows = if inner { (r0.get(i..i + 5), r1.get(i..i + 5), r2.get(i..i + 5)) } else { (None, None, None) };
+        let windows =
+            if inner { (window::<4>(r0, i), window::<4>(r1, i), window::<4>(r2, i)) } else { (None, None, None) };
         let (va, vb) = match windows {
-            (Some(&[t0, t1, t2_, t3, t4]), Some(&[m0, m1, m2, m3, m4]), Some(&[b0, b1, b2, b3, b4])) => {
+            (Some(&[t0, t1, t2_, t3]), Some(&[m0, m1, m2, m3]), Some(&[b0, b1, b2, b3])) => {
                 let s = |t: u8, m: u8, b: u8| t as i32 + 2 * m as i32 + b as i32;
                 let d = |t: u8, b: u8| b as i32 - t as i32;
-                let (s0, s2) = (s(t0, m0, b0), s(t2_, m2, b2));
                 let (d0, d1, d2, d3) = (d(t0, b0), d(t1, b1), d(t2_, b2), d(t3, b3));
-                let va = classify(s2 - s0, d0 + 2 * d1 + d2);
-                let vb = if xs == 2 {
-                    classify(s(t4, m4, b4) - s2, d2 + 2 * d3 + d(t4, b4))
-                } else {
-                    classify(s(t3, m3, b3) - s(t1, m1, b1), d1 + 2 * d2 + d3)
-                };
+                let va = classify(s(t2_, m2, b2) - s(t0, m0, b0), d0 + 2 * d1 + d2);
+                let vb = classify(s(t3, m3, b3) - s(t1, m1, b1), d1 + 2 * d2 + d3);
                 (va, vb)
             }
-            _ => (single(x), if both { single(x + xs) } else { NONE }),
+            _ => (single(x), if both { single(x + XS) } else { NONE }),
         };
         if nibbles {
             // A cell past the row's last leaves its nibble 0 (never read
@@ -503,23 +521,19 @@ fn ring_cells<const XS: usize>(
             }
         }
         c += 2;
-        x += 2 * xs;
+        x += 2 * XS;
     }
 }
 
 /// Pairs of cells two pixels apart (the checkerboard) into the 4-bit cell
-/// bytes `out`, the first pair's window starting at column `i` of the ring
-/// rows: the same sums as [`ring_cells`]' windows, but each column's sums
+/// bytes `out` (`class` gives nibbles), the first pair's window starting at
+/// column `i` of the ring rows: the same sums as [`ring_cells`]' windows,
+/// but each column's sums
 /// taken once, the last column's carried to the next pair, with no bounds
 /// test per pair. Returns the number of pairs done: all of `out`'s, unless
 /// the ring ends first.
 #[inline(always)]
-fn checker_pairs(out: &mut [u8], (r0, r1, r2): (&[u8], &[u8], &[u8]), i: usize, cfg: &SobelCells) -> usize {
-    // The cell's nibble: weak (clamped once here) or its orientation bin
-    // (below 16: at most 16 bins).
-    let (t2, weak, bins) = (cfg.t2, cfg.weak.min(NIBBLE_NONE), cfg.bins);
-    let shift = sector_shift(bins);
-    let classify = |gx: i32, gy: i32| if gx * gx + gy * gy < t2 { weak } else { orientation_with(gx, gy, shift) as u8 };
+fn checker_pairs(out: &mut [u8], (r0, r1, r2): (&[u8], &[u8], &[u8]), i: usize, class: Classify) -> usize {
     let (Some(&t), Some(&m), Some(&b)) = (r0.get(i), r1.get(i), r2.get(i)) else { return 0 };
     fn chunks(r: &[u8], from: usize) -> &[[u8; 4]] {
         r.get(from..).unwrap_or_default().as_chunks::<4>().0
@@ -535,8 +549,8 @@ fn checker_pairs(out: &mut [u8], (r0, r1, r2): (&[u8], &[u8], &[u8]), i: usize, 
     {
         // Columns x, x + 1, x + 2, x + 3: cells at x and x + 2.
         let (d0, s1, d1, d2, s3, d3) = (d(t0, b0), s(t1, m1, b1), d(t1, b1), d(t2, b2), s(t3, m3, b3), d(t3, b3));
-        let va = classify(s1 - s_prev, d_prev + 2 * d0 + d1);
-        let vb = classify(s3 - s1, d1 + 2 * d2 + d3);
+        let va = class.of(s1 - s_prev, d_prev + 2 * d0 + d1);
+        let vb = class.of(s3 - s1, d1 + 2 * d2 + d3);
         *byte = va | (vb << 4);
         (s_prev, d_prev) = (s3, d3);
         done += 1;

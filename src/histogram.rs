@@ -418,6 +418,9 @@ fn checker_walk<P: PixelRead, const K: usize>(
                 let _ = batch.push(pair);
             } else {
                 let plan = RowPlan { first: first as usize, n, start: (one - ry2, r.ax, first - r.cx), base };
+                // The map row's offset from y, not the carried ones: carried
+                // into this cold branch, they cost the common rows spills
+                // (measured: 5 k instructions per QVGA frame).
                 for (y, on) in [(y_up, up), (y_down, down)] {
                     let start = (y as usize).wrapping_sub(j0).wrapping_mul(stride);
                     if on && let Some(row) = frame.row(y as usize) {
