@@ -79,6 +79,104 @@ pub fn precision_curve(predicted: &[BoundingBox], truth: &[BoundingBox]) -> Opti
     Some((0..PRECISION_THRESHOLDS).map(|t| errs.iter().filter(|&&e| e <= t as f64).count() as f64 / n).collect())
 }
 
+/// IoU below which a frame counts as missing the target.
+pub const MISS_IOU: f64 = 0.1;
+
+/// IoU from which a frame counts as good.
+pub const GOOD_IOU: f64 = 0.3;
+
+/// How well a tracker knows when it is wrong, pooled over the frames of one
+/// or more runs: frames whose box misses the target (IoU < [`MISS_IOU`])
+/// should be reported as not tracking, good frames (IoU ≥ [`GOOD_IOU`])
+/// should not, and the confidence should rank missing frames below the rest.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Awareness {
+    /// Missing frames.
+    pub missing: usize,
+    /// Missing frames reported not tracking (lost or searching).
+    pub missing_flagged: usize,
+    /// Good frames.
+    pub good: usize,
+    /// Good frames reported not tracking.
+    pub good_flagged: usize,
+    /// (confidence, missing) of every scored frame, for the ROC.
+    pub samples: Vec<(f32, bool)>,
+}
+
+impl Awareness {
+    /// Adds one frame: the tracker's box, whether it reported tracking, its
+    /// confidence, and the truth (frames without a target are skipped).
+    pub fn add(&mut self, predicted: &BoundingBox, tracking: bool, confidence: f32, truth: &BoundingBox) {
+        if !has_target(truth) {
+            return;
+        }
+        let iou = predicted.iou(truth) as f64;
+        let missing = iou < MISS_IOU;
+        if missing {
+            self.missing += 1;
+            self.missing_flagged += !tracking as usize;
+        } else if iou >= GOOD_IOU {
+            self.good += 1;
+            self.good_flagged += !tracking as usize;
+        }
+        self.samples.push((confidence, missing));
+    }
+
+    /// Pools another set of frames into this one.
+    pub fn merge(&mut self, other: &Awareness) {
+        self.missing += other.missing;
+        self.missing_flagged += other.missing_flagged;
+        self.good += other.good;
+        self.good_flagged += other.good_flagged;
+        self.samples.extend_from_slice(&other.samples);
+    }
+
+    /// The share of missing frames reported not tracking (`None` without any).
+    pub fn missing_reported(&self) -> Option<f64> {
+        (self.missing > 0).then(|| self.missing_flagged as f64 / self.missing as f64)
+    }
+
+    /// The share of good frames reported not tracking (`None` without any).
+    pub fn good_reported_lost(&self) -> Option<f64> {
+        (self.good > 0).then(|| self.good_flagged as f64 / self.good as f64)
+    }
+
+    /// The confidence's ROC AUC for telling missing frames from the others:
+    /// the probability that a frame that is not missing has a higher
+    /// confidence than a missing one (ties count half), i.e. the
+    /// Mann–Whitney U statistic over the product of the class sizes.
+    /// `None` unless both classes occur.
+    pub fn roc_auc(&self) -> Option<f64> {
+        let mut s = self.samples.clone();
+        s.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let (mut neg, mut pos) = (0u64, 0u64);
+        // Sum of the ranks (1-based, ties averaged) of the frames that are not missing.
+        let mut rank_sum = 0.0f64;
+        let mut i = 0;
+        while i < s.len() {
+            let mut j = i;
+            while j < s.len() && s[j].0 == s[i].0 {
+                j += 1;
+            }
+            let avg_rank = (i + 1 + j) as f64 / 2.0;
+            for &(_, missing) in &s[i..j] {
+                if missing {
+                    neg += 1;
+                } else {
+                    pos += 1;
+                    rank_sum += avg_rank;
+                }
+            }
+            i = j;
+        }
+        if neg == 0 || pos == 0 {
+            return None;
+        }
+        let u = rank_sum - (pos * (pos + 1)) as f64 / 2.0;
+        Some(u / (pos * neg) as f64)
+    }
+}
+
 /// The median of a list (0 for an empty one).
 pub fn median(values: &[f64]) -> f64 {
     if values.is_empty() {
@@ -140,6 +238,41 @@ mod tests {
         assert!((sc.iter().sum::<f64>() / sc.len() as f64 - s.auc).abs() < 1e-12);
         assert_eq!(pc[20], s.precision20);
         assert!(sc.windows(2).all(|w| w[1] <= w[0]) && pc.windows(2).all(|w| w[1] >= w[0]));
+    }
+
+    #[test]
+    fn awareness_by_hand() {
+        // Reason: hand-built frames. Truth is a 10x10 box at the origin.
+        // Frame A: exact box (IoU 1, good), tracking, confidence 0.9.
+        // Frame B: disjoint box (IoU 0, missing), reported lost, confidence 0.2.
+        // Frame C: disjoint box (missing), tracking, confidence 0.95.
+        // Frame D: half-overlapping box, IoU 50/150 = 1/3 (good), lost, 0.5.
+        let t = BoundingBox::new(0.0, 0.0, 10.0, 10.0);
+        let far = BoundingBox::new(50.0, 50.0, 10.0, 10.0);
+        let half = BoundingBox::new(5.0, 0.0, 10.0, 10.0);
+        let mut a = Awareness::default();
+        a.add(&t, true, 0.9, &t);
+        a.add(&far, false, 0.2, &t);
+        a.add(&far, true, 0.95, &t);
+        a.add(&half, false, 0.5, &t);
+        a.add(&far, true, 0.1, &BoundingBox::default()); // no target: skipped
+        assert_eq!((a.missing, a.missing_flagged, a.good, a.good_flagged), (2, 1, 2, 1));
+        assert_eq!(a.missing_reported(), Some(0.5));
+        assert_eq!(a.good_reported_lost(), Some(0.5));
+        // Pairs (not missing, missing): (0.9, 0.2) yes, (0.9, 0.95) no,
+        // (0.5, 0.2) yes, (0.5, 0.95) no: 2 of 4.
+        assert_eq!(a.roc_auc(), Some(0.5));
+        // A tie counts half: one good and one missing frame at 0.7.
+        let mut b = Awareness::default();
+        b.add(&t, true, 0.7, &t);
+        b.add(&far, true, 0.7, &t);
+        assert_eq!(b.roc_auc(), Some(0.5));
+        let mut c = Awareness::default();
+        c.add(&t, true, 0.8, &t);
+        c.add(&far, true, 0.1, &t);
+        assert_eq!(c.roc_auc(), Some(1.0), "perfect separation");
+        c.merge(&b);
+        assert_eq!(c.samples.len(), 4);
     }
 
     #[test]

@@ -3,11 +3,11 @@
 
 use clap::{Parser, Subcommand};
 use host_tests::fixture::Fixture;
-use host_tests::metrics::{has_target, median, score};
+use host_tests::metrics::{Awareness, has_target, median, score};
 use host_tests::otb;
 use host_tests::runner::{Method, PARTICLES, Run, track_with};
 use indicatif::{ProgressBar, ProgressStyle};
-use pftrack::{BoundingBox, Config, Event, Frame, PixelFormat};
+use pftrack::{BoundingBox, Config, Event, Frame, PixelFormat, TrackState};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -95,6 +95,14 @@ enum Command {
         /// Run only the variants whose name contains this.
         #[arg(long)]
         only: Option<String>,
+        /// A tune / check division of the sequences (e.g.
+        /// `../shared/realseq-split.txt`): the table then has a mean AUC
+        /// column for each split besides the overall one.
+        #[arg(long)]
+        split: Option<PathBuf>,
+        /// Also print every sequence's AUC per seed under each variant.
+        #[arg(long)]
+        per_sequence: bool,
         #[command(flatten)]
         common: Common,
     },
@@ -224,10 +232,11 @@ struct Row {
     frames: usize,
     lost: usize,
     reacquired: usize,
+    aware: Awareness,
 }
 
-/// Tracks one loaded sequence and scores it.
-fn evaluate(seq: &Loaded, method: Method, config: Config, seed: u64) -> Result<(Row, Run), String> {
+/// Tracks one loaded sequence and scores it, with a progress bar unless `quiet`.
+fn evaluate(seq: &Loaded, method: Method, config: Config, seed: u64, quiet: bool) -> Result<(Row, Run), String> {
     let frames: Vec<Frame<'_>> = seq
         .frames
         .iter()
@@ -241,13 +250,17 @@ fn evaluate(seq: &Loaded, method: Method, config: Config, seed: u64) -> Result<(
     if !has_target(&init) {
         return Err(format!("{}: the first ground-truth box has no target to start from", seq.name));
     }
-    let pb = bar(frames.len(), "track");
+    let pb = if quiet { ProgressBar::hidden() } else { bar(frames.len(), "track") };
     pb.set_prefix(seq.name.clone());
     let run = track_with(method, config, seed, &frames, init, |i, _| pb.set_position(i as u64))
         .map_err(|e| format!("{}: {e}", seq.name))?;
     pb.finish_and_clear();
     let s = score(&run.boxes, &seq.truth).ok_or_else(|| format!("{}: no frame with a target to score", seq.name))?;
     let count = |ev: Event| run.estimates.iter().filter(|e| e.event == Some(ev)).count();
+    let mut aware = Awareness::default();
+    for ((e, b), t) in run.estimates.iter().zip(run.boxes.iter().skip(1)).zip(seq.truth.iter().skip(1)) {
+        aware.add(b, e.state == TrackState::Tracking, e.confidence, t);
+    }
     let row = Row {
         name: seq.name.clone(),
         auc: s.auc,
@@ -256,6 +269,7 @@ fn evaluate(seq: &Loaded, method: Method, config: Config, seed: u64) -> Result<(
         frames: seq.frames.len(),
         lost: count(Event::LostTarget),
         reacquired: count(Event::Reacquired),
+        aware,
     };
     Ok((row, run))
 }
@@ -316,7 +330,7 @@ fn write_pictures(seq: &Loaded, run: &Run, dir: &Path) -> Result<(), String> {
 
 fn run_one(path: &Path, common: &Common) -> Result<(Row, Vec<BoundingBox>, Vec<BoundingBox>), String> {
     let seq = load(path)?;
-    let (row, run) = evaluate(&seq, common.tracker, common.config, common.seed)?;
+    let (row, run) = evaluate(&seq, common.tracker, common.config, common.seed, false)?;
     if common.frames {
         print_frames(&seq, &run);
     }
@@ -449,38 +463,184 @@ fn score_command(truth: &[PathBuf], results: &[String], plots: &Path) -> Result<
     draw_plots(&sets, plots, &format!("{} sequences", seqs.len()))
 }
 
-fn ablate(paths: &[PathBuf], seeds: u64, only: Option<&str>, common: &Common) -> Result<(), String> {
+/// The tune / check division of sequences (`../shared/realseq-split.txt`:
+/// lines `tune: A B …` and `check: C D …`, `#` comments).
+struct Split {
+    tune: Vec<String>,
+    check: Vec<String>,
+}
+
+impl Split {
+    fn load(path: &Path) -> Result<Split, String> {
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let (mut tune, mut check) = (None, None);
+        for line in text.lines().map(str::trim).filter(|l| !l.is_empty() && !l.starts_with('#')) {
+            let (key, names) = line
+                .split_once(':')
+                .ok_or_else(|| format!("{}: `{line}`: expected `tune:` or `check:`", path.display()))?;
+            let names: Vec<String> = names.split_whitespace().map(str::to_string).collect();
+            match key.trim() {
+                "tune" => tune = Some(names),
+                "check" => check = Some(names),
+                other => return Err(format!("{}: unknown split `{other}`", path.display())),
+            }
+        }
+        match (tune, check) {
+            (Some(tune), Some(check)) => Ok(Split { tune, check }),
+            _ => Err(format!("{}: needs both a `tune:` and a `check:` line", path.display())),
+        }
+    }
+}
+
+/// What one (variant, seed, sequence) run gave.
+struct Cell {
+    auc: f64,
+    p20: f64,
+    ms: f64,
+    aware: Awareness,
+}
+
+/// Runs `jobs` (seed, sequence index) on every core, each with a fresh tracker.
+fn run_jobs(
+    seqs: &[Loaded],
+    jobs: &[(u64, usize)],
+    method: Method,
+    config: Config,
+    pb: &ProgressBar,
+) -> Result<Vec<Cell>, String> {
+    use std::sync::Mutex;
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let next = AtomicUsize::new(0);
+    let out: Mutex<Vec<Option<Result<Cell, String>>>> = Mutex::new((0..jobs.len()).map(|_| None).collect());
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get()).min(jobs.len().max(1));
+    std::thread::scope(|scope| {
+        for _ in 0..threads {
+            scope.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(&(seed, k)) = jobs.get(i) else { break };
+                    let Some(seq) = seqs.get(k) else { break };
+                    let cell = evaluate(seq, method, config, seed, true).map(|(row, _)| Cell {
+                        auc: row.auc,
+                        p20: row.p20,
+                        ms: row.ms,
+                        aware: row.aware,
+                    });
+                    if let Ok(mut o) = out.lock()
+                        && let Some(slot) = o.get_mut(i)
+                    {
+                        *slot = Some(cell);
+                    }
+                    pb.inc(1);
+                }
+            });
+        }
+    });
+    let out = out.into_inner().map_err(|_| "a worker thread panicked".to_string())?;
+    out.into_iter().map(|c| c.unwrap_or_else(|| Err("a run did not finish".into()))).collect()
+}
+
+/// Mean of `f` over the cells whose sequence is in `names` (all if `None`).
+fn mean_over(
+    cells: &[(usize, &Cell)],
+    seqs: &[Loaded],
+    names: Option<&[String]>,
+    f: impl Fn(&Cell) -> f64,
+) -> Option<f64> {
+    let v: Vec<f64> = cells
+        .iter()
+        .filter(|(k, _)| names.is_none_or(|n| seqs.get(*k).is_some_and(|s| n.contains(&s.name))))
+        .map(|(_, c)| f(c))
+        .collect();
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
+fn pct(v: Option<f64>) -> String {
+    v.map(|v| format!("{:.1}%", 100.0 * v)).unwrap_or_else(|| "-".into())
+}
+
+fn fmt3(v: Option<f64>) -> String {
+    v.map(|v| format!("{v:.3}")).unwrap_or_else(|| "-".into())
+}
+
+/// One line on how well the estimates' states and confidences tell good
+/// frames from missing ones.
+fn describe(a: &Awareness) -> String {
+    let total = a.samples.len().max(1) as f64;
+    format!(
+        "missing frames (IoU < 0.1): {:.1}%, of which reported not tracking {}; good frames (IoU >= 0.3) reported not tracking {}; confidence ROC AUC (missing vs the rest) {}",
+        100.0 * a.missing as f64 / total,
+        pct(a.missing_reported()),
+        pct(a.good_reported_lost()),
+        fmt3(a.roc_auc())
+    )
+}
+
+/// Options of the ablation study.
+struct AblateOpts<'a> {
+    seeds: u64,
+    only: Option<&'a str>,
+    split: Option<Split>,
+    per_sequence: bool,
+}
+
+fn ablate(paths: &[PathBuf], opts: &AblateOpts<'_>, common: &Common) -> Result<(), String> {
     let seqs: Vec<Loaded> = paths.iter().map(|p| load(p)).collect::<Result<_, _>>()?;
+    let seeds = opts.seeds;
     println!(
-        "ablation over {} sequences, seeds 1..={seeds}, {PARTICLES} particles; extra settings: {}",
+        "ablation over {} sequences, seeds 1..={seeds} (mean over seeds and sequences), {PARTICLES} particles; extra settings: {}",
         seqs.len(),
         if common.set.is_empty() { "none".to_string() } else { common.set.join(" ") }
     );
+    if let Some(sp) = &opts.split {
+        for (what, names) in [("tune", &sp.tune), ("check", &sp.check)] {
+            let have: Vec<&str> = seqs.iter().filter(|s| names.contains(&s.name)).map(|s| s.name.as_str()).collect();
+            println!("{what}: {} of {} sequences ({})", have.len(), names.len(), have.join(" "));
+        }
+    }
     println!();
-    println!("| variant | settings | mean AUC | mean P20 | ms/frame |");
-    println!("|---|---|---|---|---|");
+    println!(
+        "miss%: missing frames (IoU < 0.1) reported not tracking; good%: good frames (IoU >= 0.3) reported not tracking; ROC: the confidence's ROC AUC, missing frames against the rest (frames pooled per seed, then averaged)"
+    );
+    println!();
+    let split_cols = opts.split.is_some();
+    if split_cols {
+        println!("| variant | settings | tune AUC | check AUC | all AUC | all P20 | miss% | good% | ROC | ms/frame |");
+        println!("|---|---|---|---|---|---|---|---|---|---|");
+    } else {
+        println!("| variant | settings | mean AUC | mean P20 | miss% | good% | ROC | ms/frame |");
+        println!("|---|---|---|---|---|---|---|---|");
+    }
     let variants = VARIANTS
         .iter()
         .map(|&(name, sets)| (name, sets, Method::Pf))
         .chain(OTHER_TRACKERS.iter().map(|&(name, m)| (name, &[][..], m)));
-    for (name, sets, method) in variants.filter(|(n, _, _)| only.is_none_or(|o| n.contains(o))) {
+    for (name, sets, method) in variants.filter(|(n, _, _)| opts.only.is_none_or(|o| n.contains(o))) {
         let mut config = Config::default();
         for s in sets.iter().map(|s| s.to_string()).chain(common.set.iter().cloned()) {
             host_tests::settings::apply(&mut config, &s)?;
         }
         config.validate().map_err(|e| format!("variant `{name}`: {e}"))?;
-        let (mut auc, mut p20, mut ms, mut n) = (0.0, 0.0, 0.0, 0.0);
         // The mean-shift trackers draw no random numbers: one seed says all.
         let seeds_here = if method == Method::Pf { seeds } else { 1 };
+        let jobs: Vec<(u64, usize)> = (1..=seeds_here).flat_map(|s| (0..seqs.len()).map(move |k| (s, k))).collect();
+        let pb = bar(jobs.len(), "ablate");
+        pb.set_prefix(name.chars().take(12).collect::<String>());
+        let cells = run_jobs(&seqs, &jobs, method, config, &pb)?;
+        pb.finish_and_clear();
+        let indexed: Vec<(usize, &Cell)> = jobs.iter().map(|&(_, k)| k).zip(cells.iter()).collect();
+        // Awareness: frames pooled over sequences per seed, the rates averaged over seeds.
+        let (mut miss, mut good, mut roc) = (Vec::new(), Vec::new(), Vec::new());
         for seed in 1..=seeds_here {
-            for seq in &seqs {
-                let (row, _) = evaluate(seq, method, config, seed)?;
-                auc += row.auc;
-                p20 += row.p20;
-                ms += row.ms;
-                n += 1.0;
+            let mut pooled = Awareness::default();
+            for (_, c) in jobs.iter().zip(&cells).filter(|((s, _), _)| *s == seed) {
+                pooled.merge(&c.aware);
             }
+            miss.extend(pooled.missing_reported());
+            good.extend(pooled.good_reported_lost());
+            roc.extend(pooled.roc_auc());
         }
+        let avg = |v: &[f64]| (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64);
         let shown = match method {
             Method::Pf if sets.is_empty() => "(defaults)".to_string(),
             Method::Pf => sets.join(" "),
@@ -489,7 +649,39 @@ fn ablate(paths: &[PathBuf], seeds: u64, only: Option<&str>, common: &Common) ->
                 clap::ValueEnum::to_possible_value(&m).map(|v| v.get_name().to_string()).unwrap_or_default()
             ),
         };
-        println!("| {name} | `{shown}` | {:.3} | {:.3} | {:.3} |", auc / n, p20 / n, ms / n);
+        let all_auc = fmt3(mean_over(&indexed, &seqs, None, |c| c.auc));
+        let all_p20 = fmt3(mean_over(&indexed, &seqs, None, |c| c.p20));
+        let ms = fmt3(mean_over(&indexed, &seqs, None, |c| c.ms));
+        let aware = format!("{} | {} | {}", pct(avg(&miss)), pct(avg(&good)), fmt3(avg(&roc)));
+        match &opts.split {
+            Some(sp) => println!(
+                "| {name} | `{shown}` | {} | {} | {all_auc} | {all_p20} | {aware} | {ms} |",
+                fmt3(mean_over(&indexed, &seqs, Some(&sp.tune), |c| c.auc)),
+                fmt3(mean_over(&indexed, &seqs, Some(&sp.check), |c| c.auc)),
+            ),
+            None => println!("| {name} | `{shown}` | {all_auc} | {all_p20} | {aware} | {ms} |"),
+        }
+        if opts.per_sequence {
+            for (k, seq) in seqs.iter().enumerate() {
+                let per: Vec<String> = jobs
+                    .iter()
+                    .zip(&cells)
+                    .filter(|((_, j), _)| *j == k)
+                    .map(|(_, c)| format!("{:.3}", c.auc))
+                    .collect();
+                let group = match &opts.split {
+                    Some(sp) if sp.tune.contains(&seq.name) => " (tune)",
+                    Some(sp) if sp.check.contains(&seq.name) => " (check)",
+                    _ => "",
+                };
+                println!(
+                    "|   {}{group} | seeds {} | {} |",
+                    seq.name,
+                    per.join(" / "),
+                    fmt3(mean_over(&indexed, &seqs, Some(std::slice::from_ref(&seq.name)), |c| c.auc))
+                );
+            }
+        }
     }
     Ok(())
 }
@@ -508,7 +700,9 @@ fn main() -> ExitCode {
         }
         Command::Otb { seqs, common } => (seqs, common, None),
         Command::Fixture { files, common } => (files, common, None),
-        Command::Ablate { seqs, seeds, only, common } => (seqs, common, Some((seeds, only))),
+        Command::Ablate { seqs, seeds, only, split, per_sequence, common } => {
+            (seqs, common, Some((seeds, only, split, per_sequence)))
+        }
     };
     for s in &common.set {
         if let Err(e) = host_tests::settings::apply(&mut common.config, s) {
@@ -520,8 +714,16 @@ fn main() -> ExitCode {
         eprintln!("error: {e}");
         return ExitCode::FAILURE;
     }
-    if let Some((seeds, only)) = ablation {
-        return match ablate(&paths, seeds, only.as_deref(), &common) {
+    if let Some((seeds, only, split, per_sequence)) = ablation {
+        let split = match split.as_deref().map(Split::load).transpose() {
+            Ok(s) => s,
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::FAILURE;
+            }
+        };
+        let opts = AblateOpts { seeds, only: only.as_deref(), split, per_sequence };
+        return match ablate(&paths, &opts, &common) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("error: {e}");
@@ -571,6 +773,11 @@ fn main() -> ExitCode {
             rows.iter().map(|r| r.p20).sum::<f64>() / n,
             rows.iter().map(|r| r.ms).sum::<f64>() / n,
         );
+    }
+    if !rows.is_empty() {
+        let mut pooled = Awareness::default();
+        rows.iter().for_each(|r| pooled.merge(&r.aware));
+        println!("{}", describe(&pooled));
     }
     println!("tracks written to {}", common.out_dir.display());
     if common.plots && !scored.is_empty() {
