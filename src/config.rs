@@ -96,6 +96,84 @@ pub struct Config {
     pub reseed_fraction: Real,
     /// Smallest half axis a particle may have, in pixels (at least 1).
     pub min_half_axis: Real,
+    /// Size and shape estimated against the surroundings (see
+    /// [`crate::foreground`]), or `None` to leave size to the particles.
+    pub size: Option<SizeSearch>,
+    /// Weigh the colour model's bins by how much more the target has of
+    /// each colour than its surroundings (CBWH).
+    pub weighted_model: bool,
+    /// The grey-level template cue (see [`crate::template`]), or `None`.
+    pub template: Option<TemplateCue>,
+    /// The foreground cue (see [`crate::foreground`]), or `None`.
+    pub foreground_cue: Option<ForegroundCue>,
+    /// Keep the first colour model as an anchor: the appearance test, the
+    /// confidence and the update gate compare with it, so that a model that
+    /// adapts cannot vouch for itself.
+    pub anchor: bool,
+    /// Learn every model the diagnostics read, even those no cue uses.
+    pub diagnose: bool,
+    /// Drive the life cycle by the estimate's confidence (rather than the
+    /// first paper's appearance test), or `None`.
+    pub aware: Option<Aware>,
+}
+
+/// The confidence-driven life cycle.
+#[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Aware {
+    /// A tracking frame with a confidence below this is a miss.
+    pub lost_below: Real,
+    /// A lost target is found again when the confidence exceeds this; the
+    /// model adapts only above it.
+    pub found_above: Real,
+    /// While lost, re-draw particles where the target's colours stand out
+    /// (rather than only uniformly).
+    pub redetect: bool,
+}
+
+/// Each particle's box scored in the map of `P(target | colour)`, mixed into
+/// its similarity as `(1 − weight) · s + weight · f`.
+#[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ForegroundCue {
+    /// Share of the foreground score, in `[0, 1]`.
+    pub weight: Real,
+    /// Score by contrast with the ring around the box (or by the box's mean).
+    pub contrast: bool,
+}
+
+/// The grey-level template cue: each particle's normalised cross-correlation
+/// with the template (negative correlations count as 0) is mixed into its
+/// similarity as `(1 − weight) · s + weight · ncc`.
+#[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct TemplateCue {
+    /// Share of the template's score, in `[0, 1]`.
+    pub weight: Real,
+    /// Adaptation rate of the template on model-update frames, in `[0, 1]`.
+    pub rate: Real,
+}
+
+/// How the estimate's size and shape are searched each frame: boxes around
+/// the filter's mean, wider and narrower, taller and shorter, are scored by
+/// their contrast with the ring around them in the map of `P(target |
+/// colour)`, and the best one becomes the estimate (and rescales the particles).
+#[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SizeSearch {
+    /// Relative size step between candidates, in `(0, 0.5]`.
+    pub step: Real,
+    /// Search width and height separately (the aspect ratio changes), or
+    /// only the scale.
+    pub aspect: bool,
+    /// The ring the contrast is taken against extends to this many times
+    /// the box's width and height, in `(1, 4]`.
+    pub ring: Real,
+    /// Adaptation rate of the surroundings' histogram, in `[0, 1]`.
+    pub rate: Real,
+    /// Weight of the candidates' similarity with the models, added to
+    /// their contrast, in `[0, 10]`.
+    pub similarity: Real,
 }
 
 /// When the target model adapts (it never does with `alpha` = 0). Either
@@ -204,6 +282,13 @@ impl Default for Config {
             lost_after: 3,
             reseed_fraction: 0.25,
             min_half_axis: 2.0,
+            size: None,
+            weighted_model: false,
+            template: None,
+            foreground_cue: None,
+            anchor: false,
+            diagnose: false,
+            aware: None,
         }
     }
 }
@@ -230,6 +315,14 @@ impl Config {
     pub fn validate(&self) -> Result<(), ConfigError> {
         match self.likelihood.sigma {
             Sigma::Fixed(s) => positive("likelihood.sigma", s, 10.0)?,
+            Sigma::Spread { spread, min, max } => {
+                positive("likelihood.sigma.spread", spread, 100.0)?;
+                positive("likelihood.sigma.min", min, 10.0)?;
+                positive("likelihood.sigma.max", max, 10.0)?;
+                if min > max {
+                    return Err(ConfigError { field: "likelihood.sigma.max", problem: ParamProblem::OutOfRange });
+                }
+            }
             Sigma::Adaptive { min, max } => {
                 positive("likelihood.sigma.min", min, 10.0)?;
                 positive("likelihood.sigma.max", max, 10.0)?;
@@ -295,6 +388,22 @@ impl Config {
         }
         check("reseed_fraction", self.reseed_fraction, 0.0, 1.0)?;
         check("min_half_axis", self.min_half_axis, 1.0, (crate::frame::MAX_DIMENSION / 2) as Real)?;
+        if let Some(t) = self.template {
+            check("template.weight", t.weight, 0.0, 1.0)?;
+            check("template.rate", t.rate, 0.0, 1.0)?;
+        }
+        if let Some(s) = self.size {
+            positive("size.step", s.step, 0.5)?;
+            check("size.ring", s.ring, 1.0, 4.0)?;
+            if !(s.ring > 1.0) {
+                return Err(ConfigError { field: "size.ring", problem: ParamProblem::OutOfRange });
+            }
+            check("size.rate", s.rate, 0.0, 1.0)?;
+            check("size.similarity", s.similarity, 0.0, 10.0)?;
+            if self.quadrants {
+                return Err(ConfigError { field: "size", problem: ParamProblem::OutOfRange });
+            }
+        }
         Ok(())
     }
 }

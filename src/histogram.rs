@@ -41,6 +41,16 @@ impl Layout {
         Layout { binning, segments: 1, levels: [crate::colour::ADAPTIVE_LEVELS.0; 4] }
     }
 
+    /// The bin of an 8-bit RGB colour in the first segment (the whole
+    /// ellipse's, without quadrants).
+    #[inline]
+    pub(crate) fn bin(&self, rgb: [u8; 3]) -> usize {
+        match self.binning {
+            Binning::Adaptive => levels_bin(rgb, self.levels[0]),
+            other => other.bin(rgb),
+        }
+    }
+
     /// Whether this is the layout the per-format loops are compiled for.
     fn is_fast(&self) -> bool {
         self.segments == 1 && self.binning == Binning::Rgb8x8x8
@@ -767,6 +777,23 @@ impl<const K: usize> Model<K> {
             }
         }
         self.refresh_roots();
+    }
+
+    /// Weighs the model's bins by `w` (in `0..=LEVELS` of
+    /// [`crate::foreground`]) for the similarity sums: the roots become those
+    /// of `q(u) · w(u)`, renormalised, while `q` itself stays unweighted
+    /// for blending (background-weighted histograms, CBWH).
+    pub(crate) fn reweight(&mut self, w: &[u8; K]) {
+        let total: u64 = self.q.iter().zip(w.iter()).map(|(&q, &w)| q as u64 * w as u64).sum();
+        if total == 0 {
+            self.refresh_roots();
+            return;
+        }
+        for ((s, &q), &w) in self.sqrt_q.iter_mut().zip(self.q.iter()).zip(w.iter()) {
+            let v = ((q as u64 * w as u64 * Q_ONE + total / 2) / total).min(u16::MAX as u64) as u32;
+            *s = crate::scalar::isqrt(v << 8) as u16;
+        }
+        self.support = Support::of(&self.sqrt_q);
     }
 
     fn refresh_roots(&mut self) {

@@ -53,6 +53,7 @@ pub mod edges;
 pub mod error;
 pub mod filter;
 pub mod follower;
+pub mod foreground;
 pub mod frame;
 pub mod geometry;
 pub mod histogram;
@@ -61,12 +62,13 @@ pub mod meanshift;
 pub mod region;
 pub mod scalar;
 pub(crate) mod table;
+pub mod template;
 #[cfg(test)]
 mod testing;
 pub mod tracker;
 
 pub use colour::Binning;
-pub use config::{BoundaryCue, Config, EdgeCue, ModelUpdate, TableMode};
+pub use config::{BoundaryCue, Config, EdgeCue, ModelUpdate, SizeSearch, TableMode, TemplateCue};
 pub use edges::{EdgeMap, EdgeParams};
 pub use error::{ConfigError, Error, FrameError, ParamProblem, RegionError};
 pub use filter::{Dynamics, Particle, Resampling};
@@ -77,4 +79,4 @@ pub use likelihood::{Combination, Likelihood, Shape, Sigma};
 pub use meanshift::{MeanShift, MeanShiftConfig, Prediction};
 pub use region::Sampling;
 pub use scalar::Real;
-pub use tracker::{Estimate, Event, ScalePrior, Trace, TrackState, Tracker};
+pub use tracker::{Diagnostics, Estimate, Event, ScalePrior, Trace, TrackState, Tracker};

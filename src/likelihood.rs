@@ -23,6 +23,20 @@ pub enum Sigma {
         /// Upper bound on σ.
         max: Real,
     },
+    /// Each frame, σ from the spread of the particles' distances: the
+    /// average particle gets `exp(−spread)` of the best one's likelihood,
+    /// whatever the best one's own distance. Unlike [`Sigma::Adaptive`],
+    /// selection does not weaken when every particle is far from a perfect
+    /// match (as happens when a cue never scores 1), and does not harden
+    /// when one is perfect.
+    Spread {
+        /// How many e-folds below the best particle the average one lies.
+        spread: Real,
+        /// Lower bound on σ.
+        min: Real,
+        /// Upper bound on σ.
+        max: Real,
+    },
 }
 
 /// The form of the likelihood.
@@ -91,6 +105,7 @@ impl Likelihood {
     pub fn sigma_for(&self, d2_min: Real) -> Real {
         match self.sigma {
             Sigma::Fixed(s) => s,
+            Sigma::Spread { min, .. } => min,
             Sigma::Adaptive { min, max } => {
                 let d2 = d2_min.max(0.0);
                 let s = match self.shape {

@@ -5,12 +5,13 @@ use crate::config::{Config, MAX_EDGE_BINS, ModelUpdate, TableMode};
 use crate::edges::EdgeMap;
 use crate::error::{ConfigError, Error, ParamProblem, RegionError};
 use crate::filter::{Bounds, Particle, mean_state, resample};
+use crate::foreground::{Foreground, ForegroundMap};
 use crate::frame::Frame;
 use crate::geometry::{BoundingBox, Ellipse};
 use crate::histogram::{Clear, Histogram, Layout, Model};
 use crate::likelihood::gaussian;
 use crate::region::{Extents, Lattice};
-use crate::scalar::{Real, sqrt, unit_from_bits};
+use crate::scalar::{Real, exp, normal_from_bits, sqrt, unit_from_bits};
 use crate::table::{Bins, Table};
 use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro128PlusPlus;
@@ -178,6 +179,12 @@ struct Models<const K: usize> {
     /// `None` when the edge cue is off, or the target has no edge above the
     /// threshold (a flat target: its edge histogram says nothing).
     edge: Option<Model<MAX_EDGE_BINS>>,
+    /// Which colours are the target's rather than its surroundings'.
+    fg: Foreground<K>,
+    /// The grey-level template.
+    template: crate::template::Template,
+    /// The colour model as first learnt, which never adapts.
+    anchor: Option<Model<K>>,
 }
 
 impl<const K: usize> Models<K> {
@@ -245,6 +252,8 @@ struct Seen {
     sim: Real,
     /// The quadrants' colour similarities (zeros without quadrants).
     quads: [Real; 4],
+    /// Colour similarity with the anchor model (`rho` without one).
+    anchored: Real,
 }
 
 /// Working memory for observing regions: the histograms of the last region
@@ -256,14 +265,19 @@ struct Scratch<const K: usize, const E: usize> {
     map: EdgeMap<E>,
     /// The lattice every region of this frame is read on (the edge map's).
     lattice: Lattice,
+    /// `P(target | colour)` around the estimate, for the size search.
+    fgmap: ForegroundMap<FG_CELLS>,
 }
+
+/// Running sums of the foreground map (a 64 x 64 lattice).
+const FG_CELLS: usize = 4096;
 
 impl<const K: usize, const E: usize> Scratch<K, E> {
     /// Histograms of ellipse `e`, left in `self` (for a model update), with
     /// the colour bins `clear` says exact.
     fn observe(&mut self, frame: &Frame<'_>, e: &Ellipse, layout: &Layout, edges: bool, clear: Clear<'_>) {
         // One walk over the region feeds both cues.
-        let Scratch { colour, edge, map, lattice } = self;
+        let Scratch { colour, edge, map, lattice, .. } = self;
         let edges = if edges {
             Some((&*map, edge))
         } else {
@@ -278,7 +292,7 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
     /// update); without, only what the comparison read is.
     fn similarity(&mut self, cfg: &Config, frame: &Frame<'_>, models: &Models<K>, e: &Ellipse, keep: bool) -> Seen {
         let clear = match models.colour.support() {
-            Some(support) if !keep => Clear::Support(support),
+            Some(support) if !keep && models.anchor.is_none() => Clear::Support(support),
             _ => Clear::All,
         };
         self.observe(frame, e, &models.layout, models.edge.is_some(), clear);
@@ -292,7 +306,8 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
             }
             None => rho,
         };
-        Seen { rho, sim, quads }
+        let anchored = models.anchor.as_ref().map_or(rho, |a| a.compare(&self.colour, cfg.similarity)[0]);
+        Seen { rho, sim, quads, anchored }
     }
 
     /// Chooses the lattice of regions with half axes `half_axes` (the
@@ -405,6 +420,32 @@ pub struct Tracker<
     table: Table<T>,
     state: TrackState,
     misses: u16,
+    /// What the last step measured, for diagnostics.
+    diag: Diagnostics,
+}
+
+/// Internals of the last step, for diagnostics and for studying which
+/// signals tell a good estimate from a lost one.
+#[derive(Copy, Clone, Debug, Default, PartialEq)]
+pub struct Diagnostics {
+    /// Colour similarity of the estimate with the adapted model.
+    pub rho: Real,
+    /// Colour similarity of the estimate with the first model.
+    pub anchored: Real,
+    /// Combined similarity of the estimate (colour and edges).
+    pub sim: Real,
+    /// Contrast of the estimate's box with its ring in the foreground map.
+    pub contrast: Real,
+    /// Weighted spread of the particles' centres, relative to the size.
+    pub spread: Real,
+    /// Effective sample size of the weights, relative to N.
+    pub ess: Real,
+    /// Best particle's similarity.
+    pub best: Real,
+    /// Mean particle similarity.
+    pub mean: Real,
+    /// Template correlation at the estimate.
+    pub ncc: Real,
 }
 
 impl<const N: usize, const K: usize, const E: usize, const T: usize> Tracker<N, K, E, Xoshiro128PlusPlus, T> {
@@ -443,17 +484,24 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
                 edge: Histogram::new(),
                 map: EdgeMap::new(),
                 lattice: Lattice::FULL,
+                fgmap: ForegroundMap::new(),
             },
             table: Table::new(),
             target: None,
             state: TrackState::Searching,
             misses: 0,
+            diag: Diagnostics::default(),
         })
     }
 
     /// The configuration.
     pub fn config(&self) -> &Config {
         &self.config
+    }
+
+    /// Internals of the last step.
+    pub fn diagnostics(&self) -> Diagnostics {
+        self.diag
     }
 
     /// The current state.
@@ -552,13 +600,36 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         // Nothing fails from here on.
         let edge = if cfg.edges.is_some() { Model::from_histogram(&sc.edge) } else { None };
         let target = slot.insert(Target {
-            models: Models { layout, colour: Model::zero(), edge },
+            models: Models {
+                layout,
+                colour: Model::zero(),
+                edge,
+                fg: Foreground::new(),
+                template: crate::template::Template::new(),
+                anchor: None,
+            },
             frame: (fw, fh),
             threshold: 0.0,
             half_axes: (e.hx.max(cfg.min_half_axis), e.hy.max(cfg.min_half_axis)),
             rho0: (0.0, 0),
         });
         target.models.colour.learn(&sc.colour, segments);
+        if cfg.anchor || cfg.diagnose || cfg.aware.is_some() {
+            target.models.anchor = Some(target.models.colour.clone());
+        }
+        target.models.template.learn(frame, &e);
+        if cfg.size.is_some()
+            || cfg.weighted_model
+            || cfg.foreground_cue.is_some()
+            || cfg.diagnose
+            || cfg.aware.is_some()
+        {
+            let m = &mut target.models;
+            m.fg.learn(frame, &e, &m.layout, &m.colour, 1.0);
+            if cfg.weighted_model {
+                m.colour.reweight(m.fg.odds());
+            }
+        }
         let models = &target.models;
 
         // Background similarity on a grid of target-sized regions that do not
@@ -648,8 +719,21 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             let (hx, hy) = target.half_axes;
             // Spread over the set: copies of one parent tend to sit together.
             let stride = N.checked_div(reseed).unwrap_or(N);
-            for p in self.particles.iter_mut().step_by(stride.max(1)).take(reseed) {
-                *p = uniform_particle(&mut self.rng, size.0, size.1, hx, hy);
+            let spots = match cfg.aware {
+                Some(a) if a.redetect => redetect(&mut self.scratch.fgmap, frame, &target.models, (hx, hy)),
+                _ => [None; SPOTS],
+            };
+            let found = spots.iter().flatten().count();
+            for (i, p) in self.particles.iter_mut().step_by(stride.max(1)).take(reseed).enumerate() {
+                // Half of the re-drawn particles go to the likeliest spots.
+                *p = match spots.get(i / 2 % SPOTS.max(1)).copied().flatten() {
+                    Some((x, y)) if i % 2 == 0 && found > 0 => {
+                        let s = sqrt(4.0 * hx * hy);
+                        let mut n = || normal_from_bits(self.rng.next_u64());
+                        Particle { x: x + 0.1 * s * n(), y: y + 0.1 * s * n(), hx, hy, ..Default::default() }
+                    }
+                    _ => uniform_particle(&mut self.rng, size.0, size.1, hx, hy),
+                };
             }
         }
 
@@ -663,6 +747,19 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             (x0, y0, x1, y1)
         });
         self.scratch.prepare(cfg, frame, rect, target.half_axes);
+        if let Some(fc) = cfg.foreground_cue {
+            // The map covers every particle's box and, for the contrast, its ring.
+            let ring = if fc.contrast { 1.5 } else { 1.0 };
+            let (mut x0, mut y0, mut x1, mut y1) = (i32::MAX, i32::MAX, i32::MIN, i32::MIN);
+            for p in self.particles.iter() {
+                let (ax, ay) = (ring * p.hx, ring * p.hy);
+                x0 = x0.min(crate::region::floor(p.x - ax));
+                y0 = y0.min(crate::region::floor(p.y - ay));
+                x1 = x1.max(crate::region::floor(p.x + ax) + 1);
+                y1 = y1.max(crate::region::floor(p.y + ay) + 1);
+            }
+            self.scratch.fgmap.compute(frame, (x0, y0, x1, y1), &target.models.layout, &target.models.fg);
+        }
         // Similarity per particle, kept in `weights` until σ is known. The
         // boundary scores wait in `copies`, free until the next resampling
         // (in 1/16 Sobel units; at most 1443 · 16 < 2^16), until the best
@@ -685,13 +782,24 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             let (rho, sim) = if table.is_some() {
                 self.table.lookup(p.x, p.y)
             } else {
-                let Seen { rho, sim, .. } = self.scratch.similarity(cfg, frame, &target.models, &e, false);
-                (rho, sim)
+                let Seen { rho, anchored, sim, .. } = self.scratch.similarity(cfg, frame, &target.models, &e, false);
+                (if cfg.anchor { anchored } else { rho }, sim)
             };
             if rho > target.threshold {
                 appearing += 1;
             }
-            *w = sim;
+            *w = match cfg.template {
+                Some(t) => (1.0 - t.weight) * sim + t.weight * target.models.template.correlation(frame, &e).max(0.0),
+                None => sim,
+            };
+            if let Some(fc) = cfg.foreground_cue {
+                let f = if fc.contrast {
+                    self.scratch.fgmap.contrast(&e, 1.5).unwrap_or(0.0).max(0.0)
+                } else {
+                    self.scratch.fgmap.mean(&e).unwrap_or(0.0)
+                };
+                *w = (1.0 - fc.weight) * *w + fc.weight * f;
+            }
             if cfg!(feature = "boundary") && cfg.boundary.is_some() {
                 *g = boundary_q(frame, &e);
                 g_best = g_best.max(*g);
@@ -705,11 +813,21 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             }
         }
         let best = self.weights.iter().fold(0.0 as Real, |a, &w| a.max(w));
+        self.diag.best = best;
+        self.diag.mean = self.weights.iter().sum::<Real>() / N as Real;
         let d2_max = target.models.d2_max(cfg);
-        let sigma = cfg.likelihood.sigma_for(d2_max * (1.0 - best));
+        let (sigma, offset) = match cfg.likelihood.sigma {
+            crate::likelihood::Sigma::Spread { spread, min, max } => {
+                let mean_w = self.weights.iter().sum::<Real>() / N as Real;
+                let s2 = d2_max * (best - mean_w).max(0.0) / (2.0 * spread);
+                let sigma = crate::scalar::clamp(sqrt(s2), min, max);
+                (sigma, d2_max * (1.0 - best) - 2.0 * sigma * sigma)
+            }
+            _ => (cfg.likelihood.sigma_for(d2_max * (1.0 - best)), 0.0),
+        };
         let mut sum = 0.0;
         for w in self.weights.iter_mut() {
-            *w = cfg.likelihood.weight(d2_max * (1.0 - *w), sigma);
+            *w = cfg.likelihood.weight(d2_max * (1.0 - *w) - offset, sigma);
             sum += *w;
         }
         if sum > 0.0 && sum.is_finite() {
@@ -722,13 +840,51 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
 
         // 4. Estimate the mean state and look at it.
         let mean = mean_state(&self.particles, &self.weights);
-        let ellipse = mean.ellipse();
+        let mut ellipse = mean.ellipse();
+        if let Some(search) = cfg.size {
+            let (fx, fy) = search_size(&mut self.scratch, cfg, frame, &target.models, &ellipse, &search);
+            ellipse.hx *= fx;
+            ellipse.hy *= fy;
+            for p in self.particles.iter_mut() {
+                p.hx *= fx;
+                p.hy *= fy;
+            }
+        }
+        {
+            let (mut sx, mut sy, mut ess) = (0.0, 0.0, 0.0);
+            for (p, &w) in self.particles.iter().zip(self.weights.iter()) {
+                sx += w * (p.x - ellipse.cx) * (p.x - ellipse.cx);
+                sy += w * (p.y - ellipse.cy) * (p.y - ellipse.cy);
+                ess += w * w;
+            }
+            self.diag.spread = sqrt((sx + sy) / (4.0 * ellipse.hx * ellipse.hy).max(1.0));
+            self.diag.ess = if ess > 0.0 { 1.0 / (ess * N as Real) } else { 0.0 };
+            let ring = 1.5;
+            let rect = (
+                crate::region::floor(ellipse.cx - ring * ellipse.hx) - 1,
+                crate::region::floor(ellipse.cy - ring * ellipse.hy) - 1,
+                crate::region::floor(ellipse.cx + ring * ellipse.hx) + 2,
+                crate::region::floor(ellipse.cy + ring * ellipse.hy) + 2,
+            );
+            if cfg.size.is_some()
+                || cfg.weighted_model
+                || cfg.foreground_cue.is_some()
+                || cfg.diagnose
+                || cfg.aware.is_some()
+            {
+                self.scratch.fgmap.compute(frame, rect, &target.models.layout, &target.models.fg);
+                self.diag.contrast = self.scratch.fgmap.contrast(&ellipse, ring).unwrap_or(0.0);
+            }
+            self.diag.ncc = target.models.template.correlation(frame, &ellipse);
+        }
         let seen_mean = self.scratch.similarity(cfg, frame, &target.models, &ellipse, true);
+        (self.diag.rho, self.diag.anchored, self.diag.sim) = (seen_mean.rho, seen_mean.anchored, seen_mean.sim);
         let confidence = match cfg.boundary {
             Some(b) if g_best > 0 => {
                 let g = (boundary_q(frame, &ellipse) as Real / g_best as Real).min(1.0);
                 (1.0 - b.weight) * seen_mean.sim + b.weight * g
             }
+            _ if cfg.anchor => seen_mean.anchored,
             _ => seen_mean.sim,
         };
         let occluded_quadrant = if cfg!(feature = "quadrants") && cfg.quadrants {
@@ -737,8 +893,23 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             None
         };
 
-        // 5. The appearance test drives the state machine.
-        let seen = appearing as Real > cfg.kickoff * N as Real;
+        // 5. The appearance test (or the confidence) drives the state machine.
+        let aware_p = cfg.aware.map(|_| {
+            let ncc = self.diag.ncc.max(0.0);
+            let z = 9.2 * self.diag.contrast + 2.4 * ncc + 4.8 * seen_mean.anchored - 4.2;
+            1.0 / (1.0 + exp(-z))
+        });
+        let seen = match (cfg.aware, aware_p) {
+            (Some(a), Some(p)) => {
+                if self.state == TrackState::Tracking {
+                    p >= a.lost_below
+                } else {
+                    p > a.found_above
+                }
+            }
+            _ => appearing as Real > cfg.kickoff * N as Real,
+        };
+        let confidence = aware_p.unwrap_or(confidence);
         let mut event = None;
         match self.state {
             TrackState::Tracking => {
@@ -763,6 +934,10 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         // 6. Adapt the model, only on confident tracking frames.
         let steady = self.state == TrackState::Tracking && event.is_none() && self.misses == 0 && cfg.alpha > 0.0;
         let wanted = match cfg.model_update {
+            ModelUpdate::Confident if cfg.anchor => {
+                seen_mean.anchored > target.threshold
+                    && gaussian(d2_max * (1.0 - seen_mean.sim), cfg.update_sigma) > cfg.update_threshold
+            }
             ModelUpdate::Confident => gaussian(d2_max * (1.0 - confidence), cfg.update_sigma) > cfg.update_threshold,
             ModelUpdate::WhenDegraded { factor, frames } => {
                 let (sum, n) = &mut target.rho0;
@@ -779,12 +954,28 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
                 }
             }
         };
-        let model_updated = steady && wanted;
+        let model_updated = steady && wanted && cfg.aware.is_none_or(|a| aware_p.is_some_and(|p| p > a.found_above));
         if model_updated {
             // The scratch still holds the mean state's histograms.
             target.models.colour.blend(&self.scratch.colour, cfg.alpha);
             if let Some(m) = target.models.edge.as_mut() {
                 m.blend(&self.scratch.edge, cfg.alpha);
+            }
+            if let Some(t) = cfg.template {
+                target.models.template.blend(frame, &ellipse, t.rate);
+            }
+            if cfg.size.is_some()
+                || cfg.weighted_model
+                || cfg.foreground_cue.is_some()
+                || cfg.diagnose
+                || cfg.aware.is_some()
+            {
+                let rate = cfg.size.map_or(0.05, |s| s.rate);
+                let m = &mut target.models;
+                m.fg.learn(frame, &ellipse, &m.layout, &m.colour, rate);
+                if cfg.weighted_model {
+                    m.colour.reweight(m.fg.odds());
+                }
             }
         }
         if self.state == TrackState::Tracking {
@@ -837,6 +1028,101 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     pub fn table_spacing(&self) -> Option<usize> {
         self.config.table.map(|_| self.table.spacing() as usize)
     }
+}
+
+/// The factors on the half axes of `e` whose box has the best contrast with
+/// its surroundings (see [`crate::foreground`]) plus `search.similarity`
+/// times its similarity with the models; (1, 1) when no candidate beats it.
+fn search_size<const K: usize, const E: usize>(
+    sc: &mut Scratch<K, E>,
+    cfg: &Config,
+    frame: &Frame<'_>,
+    models: &Models<K>,
+    e: &Ellipse,
+    search: &crate::config::SizeSearch,
+) -> (Real, Real) {
+    let up = 1.0 + search.step;
+    let reach = search.ring * up;
+    let rect = (
+        crate::region::floor(e.cx - reach * e.hx) - 1,
+        crate::region::floor(e.cy - reach * e.hy) - 1,
+        crate::region::floor(e.cx + reach * e.hx) + 2,
+        crate::region::floor(e.cy + reach * e.hy) + 2,
+    );
+    sc.fgmap.compute(frame, rect, &models.layout, &models.fg);
+    let factors = [1.0, up, 1.0 / up];
+    let mut best = (1.0, 1.0);
+    let mut best_score = Real::NEG_INFINITY;
+    for &fx in &factors {
+        for &fy in &factors {
+            if !search.aspect && fx != fy {
+                continue;
+            }
+            let c = Ellipse { hx: e.hx * fx, hy: e.hy * fy, ..*e };
+            let Some(mut score) = sc.fgmap.contrast(&c, search.ring) else { continue };
+            if search.similarity > 0.0 {
+                score += search.similarity * sc.similarity(cfg, frame, models, &c, false).sim;
+            }
+            if score > best_score {
+                (best, best_score) = ((fx, fy), score);
+            }
+        }
+    }
+    best
+}
+
+/// Spots re-detection proposes.
+const SPOTS: usize = 4;
+
+/// The centres of the (at most [`SPOTS`]) target-sized boxes of `frame`
+/// that stand out most from their surroundings in the foreground map,
+/// best first, at least one box apart.
+fn redetect<const K: usize>(
+    map: &mut ForegroundMap<FG_CELLS>,
+    frame: &Frame<'_>,
+    models: &Models<K>,
+    (hx, hy): (Real, Real),
+) -> [Option<(Real, Real)>; SPOTS] {
+    let (w, h) = (frame.width() as i32, frame.height() as i32);
+    map.compute(frame, (0, 0, w, h), &models.layout, &models.fg);
+    let stride = hx.min(hy).max(map.step() as Real);
+    let mut best: [Option<(Real, Real, Real)>; SPOTS] = [None; SPOTS];
+    let mut y = hy;
+    while y < h as Real - hy {
+        let mut x = hx;
+        while x < w as Real - hx {
+            if let Some(c) = map.contrast(&Ellipse { cx: x, cy: y, hx, hy }, 1.5) {
+                // Insert into the list if it beats an entry and is not next to a better one.
+                let near = |&(bx, by, _): &(Real, Real, Real)| (bx - x).abs() < 2.0 * hx && (by - y).abs() < 2.0 * hy;
+                let dominated = best.iter().flatten().any(|b| near(b) && b.2 >= c);
+                if !dominated && c > 0.0 {
+                    // Weaker neighbours make way; the rest keep their order.
+                    let mut kept = [None; SPOTS];
+                    let mut k = 0;
+                    let mut item = Some((x, y, c));
+                    for old in best.iter().flatten().filter(|b| !near(b)) {
+                        if item.is_some_and(|(_, _, ci)| ci >= old.2) {
+                            if let Some(slot) = kept.get_mut(k) {
+                                *slot = item.take();
+                                k += 1;
+                            }
+                        }
+                        if let Some(slot) = kept.get_mut(k) {
+                            *slot = Some(*old);
+                            k += 1;
+                        }
+                    }
+                    if let (Some(slot), Some(_)) = (kept.get_mut(k), item) {
+                        *slot = item;
+                    }
+                    best = kept;
+                }
+            }
+            x += stride;
+        }
+        y += stride;
+    }
+    best.map(|b| b.map(|(x, y, _)| (x, y)))
 }
 
 /// A particle at rest anywhere in a `width × height` frame.

@@ -58,6 +58,8 @@ pub struct Run {
     pub colour_levels: Option<[u8; 4]>,
     /// Every 4th particle's centre after each step (for pictures).
     pub particles: Vec<Vec<(f32, f32)>>,
+    /// The particle filter's diagnostics after each step (empty for mean shift).
+    pub diagnostics: Vec<pftrack::Diagnostics>,
 }
 
 /// Tracks `frames` with `method`, initialised on the first with `init`
@@ -109,13 +111,16 @@ pub fn track<'a>(
     tracker.init(first, init)?;
     let threshold = tracker.appearance_threshold().unwrap_or(0.0);
     let levels = tracker.colour_levels();
+    let mut diagnostics = Vec::new();
     let mut run = run_steps(frames, init, threshold, progress, |f| {
         let t0 = Instant::now();
         let est = tracker.step(f)?;
         let ms = ms_since(t0);
+        diagnostics.push(tracker.diagnostics());
         Ok((est, ms, tracker.particles().iter().step_by(4).map(|p| (p.x, p.y)).collect()))
     })?;
     run.colour_levels = levels;
+    run.diagnostics = diagnostics;
     Ok(run)
 }
 
@@ -141,6 +146,7 @@ fn run_steps<'a>(
         threshold,
         colour_levels: None,
         particles: Vec::new(),
+        diagnostics: Vec::new(),
     };
     for (i, f) in frames.iter().enumerate().skip(1) {
         let (est, ms, particles) = step(f)?;

@@ -20,6 +20,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ("table", "off | SPACING (likelihood-table mode, grid spacing in px)"),
     ("sigma", "fixed σ, e.g. 0.2"),
     ("adaptive_sigma", "MIN:MAX, e.g. 0.02:0.5 (σ chosen per frame)"),
+    ("spread_sigma", "SPREAD:MIN:MAX, e.g. 2:0.005:0.5 (σ from the particles' spread)"),
     ("eps", "likelihood floor ε"),
     ("position_noise", "fraction of target size per frame"),
     ("velocity_noise", "fraction of target size per frame"),
@@ -35,6 +36,16 @@ pub const KEYS: &[(&str, &str)] = &[
     ("lost_after", "frames"),
     ("reseed_fraction", "fraction re-drawn per frame while searching"),
     ("min_half_axis", "pixels"),
+    ("template", "off | WEIGHT:RATE (grey template cue, NCC, share WEIGHT, adaptation RATE)"),
+    ("foreground", "off | WEIGHT[:contrast] (per-particle P(target|colour) cue)"),
+    ("anchor", "on | off (appearance, confidence and update gate against the first model)"),
+    ("diagnose", "on | off (learn every model the diagnostics read)"),
+    ("aware", "off | LOST:FOUND[:redetect] (confidence-driven life cycle)"),
+    ("weighted_model", "on | off (colour model weighted against the surroundings, CBWH)"),
+    (
+        "size",
+        "off | STEP:RING:RATE:SIMILARITY[:scale] (size search against the surroundings, e.g. 0.05:1.5:0.05:1; scale: no aspect change)",
+    ),
 ];
 
 fn num(key: &str, v: &str) -> Result<f32, String> {
@@ -147,6 +158,11 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
             let (lo, hi) = v.split_once(':').ok_or_else(|| format!("adaptive_sigma: `{v}` is not MIN:MAX"))?;
             c.likelihood.sigma = Sigma::Adaptive { min: num(key, lo)?, max: num(key, hi)? };
         }
+        "spread_sigma" => {
+            let p: Vec<&str> = v.split(':').collect();
+            let [a, lo, hi] = p.as_slice() else { return Err(format!("spread_sigma: `{v}` is not SPREAD:MIN:MAX")) };
+            c.likelihood.sigma = Sigma::Spread { spread: num(key, a)?, min: num(key, lo)?, max: num(key, hi)? };
+        }
         "eps" => c.likelihood.eps = num(key, v)?,
         "position_noise" => c.dynamics.position_noise = num(key, v)?,
         "velocity_noise" => c.dynamics.velocity_noise = num(key, v)?,
@@ -162,6 +178,59 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
         "lost_after" => c.lost_after = v.parse().map_err(|_| format!("lost_after: `{v}` is not a whole number"))?,
         "reseed_fraction" => c.reseed_fraction = num(key, v)?,
         "min_half_axis" => c.min_half_axis = num(key, v)?,
+        "template" => {
+            c.template = if v == "off" {
+                None
+            } else {
+                let (w, r) = v.split_once(':').ok_or_else(|| format!("{key}: `{v}`: expected off or WEIGHT:RATE"))?;
+                Some(pftrack::TemplateCue { weight: num(key, w)?, rate: num(key, r)? })
+            }
+        }
+        "foreground" => {
+            c.foreground_cue = match v.split_once(':') {
+                _ if v == "off" => None,
+                Some((w, "contrast")) => Some(pftrack::config::ForegroundCue { weight: num(key, w)?, contrast: true }),
+                None => Some(pftrack::config::ForegroundCue { weight: num(key, v)?, contrast: false }),
+                _ => return Err(format!("{key}: `{v}`: expected off or WEIGHT[:contrast]")),
+            }
+        }
+        "anchor" => c.anchor = choice(key, v, &[("on", true), ("off", false)])?,
+        "diagnose" => c.diagnose = choice(key, v, &[("on", true), ("off", false)])?,
+        "aware" => {
+            let p: Vec<&str> = v.split(':').collect();
+            c.aware = match p.as_slice() {
+                ["off"] => None,
+                [l, f] => Some(pftrack::config::Aware {
+                    lost_below: num(key, l)?,
+                    found_above: num(key, f)?,
+                    redetect: false,
+                }),
+                [l, f, "redetect"] => {
+                    Some(pftrack::config::Aware { lost_below: num(key, l)?, found_above: num(key, f)?, redetect: true })
+                }
+                _ => return Err(format!("{key}: `{v}`: expected off or LOST:FOUND[:redetect]")),
+            };
+        }
+        "weighted_model" => c.weighted_model = choice(key, v, &[("on", true), ("off", false)])?,
+        "size" => {
+            c.size = if v == "off" {
+                None
+            } else {
+                let parts: Vec<&str> = v.split(':').collect();
+                let (nums, aspect) = match parts.as_slice() {
+                    [a, b, r, w] => ([*a, *b, *r, *w], true),
+                    [a, b, r, w, "scale"] => ([*a, *b, *r, *w], false),
+                    _ => return Err(format!("{key}: `{v}`: expected off or STEP:RING:RATE:SIMILARITY[:scale]")),
+                };
+                Some(pftrack::SizeSearch {
+                    step: num(key, nums[0])?,
+                    ring: num(key, nums[1])?,
+                    rate: num(key, nums[2])?,
+                    similarity: num(key, nums[3])?,
+                    aspect,
+                })
+            }
+        }
         _ => {
             let known: Vec<&str> = KEYS.iter().map(|(k, _)| *k).collect();
             return Err(format!("unknown setting `{key}`; known: {}", known.join(", ")));

@@ -47,6 +47,11 @@ struct Common {
     /// (repeatable; an unknown key lists the known ones).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
+    /// Also append every frame's diagnostics to this CSV file (sequence,
+    /// frame, IoU with the truth, state, confidence, then the tracker's
+    /// internal signals), for studying failure detection.
+    #[arg(long)]
+    dump: Option<PathBuf>,
 }
 
 #[derive(Subcommand)]
@@ -336,6 +341,37 @@ fn run_one(path: &Path, common: &Common) -> Result<(Row, Vec<BoundingBox>, Vec<B
     }
     if common.gif {
         write_pictures(&seq, &run, &common.out_dir)?;
+    }
+    if let Some(path) = &common.dump {
+        use std::io::Write;
+        let mut f = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        let mut text = String::new();
+        for (i, ((e, d), b)) in run.estimates.iter().zip(&run.diagnostics).zip(run.boxes.iter().skip(1)).enumerate() {
+            let Some(t) = seq.truth.get(i + 1).filter(|t| has_target(t)) else { continue };
+            text += &format!(
+                "{},{},{:.4},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{}\n",
+                seq.name,
+                i + 2,
+                b.iou(t),
+                (e.state == TrackState::Tracking) as u8,
+                e.confidence,
+                d.rho,
+                d.anchored,
+                d.sim,
+                d.contrast,
+                d.spread,
+                d.ess,
+                d.best,
+                d.mean,
+                d.ncc,
+                e.appearing
+            );
+        }
+        f.write_all(text.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     let out = common.out_dir.join(format!("{}.txt", seq.name));
     let text: String =

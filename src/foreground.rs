@@ -1,0 +1,300 @@
+//! The target against its surroundings: which colours say "target", and a
+//! per-frame map of them for scoring boxes.
+//!
+//! A colour histogram compared with a model by the Bhattacharyya coefficient
+//! does not know the background: a box that slides onto a patch of the
+//! target's colours, or grows to take in more of them, scores as well as
+//! the target. Discriminative colour trackers (Possegger et al., "In
+//! defense of color-based model-free tracking", 2015; the colour score of
+//! Staple, Bertinetto et al. 2016; the background ratio of ASMS, Vojíř et
+//! al. 2014) learn instead, per colour bin `u`, how likely a pixel of that
+//! colour belongs to the target rather than to the region around it:
+//!
+//! `P(target | u) = q(u) / (q(u) + b(u))`
+//!
+//! with `q` the target's normalised histogram and `b` that of a ring around
+//! the target box ([`Foreground`]). Each frame, [`ForegroundMap`] reads that
+//! probability for the pixels of a rectangle (on a lattice, 4 bits each)
+//! and keeps their running sums (an integral image), so that the sum over
+//! any box is four reads. The score of a box is its *contrast*: the mean
+//! probability inside minus the mean in a ring around it. A box that fits
+//! the target maximises it: a larger box takes in background (its inside
+//! mean falls), a smaller one leaves target in its ring (its ring mean
+//! rises). That is what lets the tracker estimate size and shape.
+
+use crate::frame::Frame;
+use crate::geometry::Ellipse;
+use crate::histogram::{Layout, Model};
+use crate::scalar::Real;
+
+/// Probability levels of a map cell: `P(target | colour)` in sixteenths,
+/// 0..=15. Coarse per pixel, but scores are means over tens to thousands of
+/// cells; and 15 · 4096 cells fits a `u16` running sum.
+pub const LEVELS: u32 = 15;
+
+/// Per-bin `P(target | colour)` in `0..=LEVELS`, learnt from the target model
+/// and the histogram of a ring around the target.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Foreground<const K: usize> {
+    /// The surroundings' normalised histogram, in units of `2^-16`.
+    around: [u16; K],
+    /// `P(target | bin)` in `0..=LEVELS`.
+    odds: [u8; K],
+}
+
+/// Added to both histograms' bins (units of `2^-16`) so that a colour seen
+/// in neither is even odds and one seen a little in one of them is not
+/// certain.
+const PRIOR: u32 = 64;
+
+impl<const K: usize> Foreground<K> {
+    /// Even odds everywhere (nothing learnt).
+    pub(crate) const fn new() -> Self {
+        Foreground { around: [0; K], odds: [(LEVELS as u8).div_ceil(2); K] }
+    }
+
+    /// `P(target | bin)` of every bin, in `0..=LEVELS`.
+    pub fn odds(&self) -> &[u8; K] {
+        &self.odds
+    }
+
+    /// Learns the surroundings of box `e` in `frame` (replacing them when
+    /// `rate` is 1, blending `b ← (1 − rate) b + rate · b_new` otherwise) and
+    /// refreshes the odds against `model`.
+    pub(crate) fn learn(&mut self, frame: &Frame<'_>, e: &Ellipse, layout: &Layout, model: &Model<K>, rate: Real) {
+        let mut counts = [0u32; K];
+        let total = ring_histogram(frame, e, layout, &mut counts);
+        if total > 0 {
+            let a = (crate::scalar::clamp(rate, 0.0, 1.0) * 65536.0) as u64;
+            for (b, &c) in self.around.iter_mut().zip(counts.iter()) {
+                let new = (c as u64 * 65536 / total as u64).min(65535);
+                *b = (((65536 - a) * *b as u64 + a * new + 32768) >> 16).min(65535) as u16;
+            }
+        }
+        self.refresh(model);
+    }
+
+    /// Recomputes the odds from the target model's bins and the surroundings.
+    pub(crate) fn refresh(&mut self, model: &Model<K>) {
+        for ((o, &q), &b) in self.odds.iter_mut().zip(model.bins().iter()).zip(self.around.iter()) {
+            let (q, b) = (q as u32 + PRIOR, b as u32 + PRIOR);
+            *o = ((LEVELS * q + (q + b) / 2) / (q + b)) as u8;
+        }
+    }
+}
+
+/// The flat-weighted colour histogram of the ring between box `e` and the
+/// box twice its width and height around it (three target areas), clipped
+/// to the frame, on a lattice of at most about 2000 samples. Returns the
+/// number of samples.
+fn ring_histogram<const K: usize>(frame: &Frame<'_>, e: &Ellipse, layout: &Layout, counts: &mut [u32; K]) -> u32 {
+    let (w, h) = (frame.width() as i32, frame.height() as i32);
+    let inner = pixel_box(e.cx - e.hx, e.cy - e.hy, e.cx + e.hx, e.cy + e.hy, w, h);
+    let outer = pixel_box(e.cx - 2.0 * e.hx, e.cy - 2.0 * e.hy, e.cx + 2.0 * e.hx, e.cy + 2.0 * e.hy, w, h);
+    let area = ((outer.2 - outer.0) as u32).saturating_mul((outer.3 - outer.1) as u32);
+    let step = lattice_step(area, 2000);
+    let mut n = 0u32;
+    let mut y = outer.1;
+    while y < outer.3 {
+        let mut x = outer.0;
+        while x < outer.2 {
+            let inside = x >= inner.0 && x < inner.2 && y >= inner.1 && y < inner.3;
+            if !inside && let Some(rgb) = frame.rgb(x as usize, y as usize) {
+                if let Some(c) = counts.get_mut(layout.bin(rgb)) {
+                    *c += 1;
+                    n += 1;
+                }
+            }
+            x += step;
+        }
+        y += step;
+    }
+    n
+}
+
+/// The pixel rectangle `[x0, x1) × [y0, y1)` covering a real box, clipped to
+/// a `w × h` frame.
+fn pixel_box(x0: Real, y0: Real, x1: Real, y1: Real, w: i32, h: i32) -> (i32, i32, i32, i32) {
+    let c = |v: Real, hi: i32| crate::scalar::clamp(v, 0.0, hi as Real) as i32;
+    (c(x0, w), c(y0, h), c(x1 + 0.999, w), c(y1 + 0.999, h))
+}
+
+/// The smallest lattice step that samples an area of `area` pixels with at
+/// most about `budget` samples.
+fn lattice_step(area: u32, budget: u32) -> i32 {
+    let mut step = 1i32;
+    while area / (step * step) as u32 > budget {
+        step += 1;
+    }
+    step
+}
+
+/// `P(target | colour)` over a rectangle of one frame, on a lattice, with
+/// running sums: the sum over any box is four reads. Holds at most `F`
+/// running sums, i.e. `(columns + 1) · (rows + 1) <= F`; larger rectangles
+/// are read on a coarser lattice.
+#[derive(Clone, Debug)]
+pub struct ForegroundMap<const F: usize> {
+    /// `sums[j · (cols + 1) + i]`: the sum of the cells left of column `i`
+    /// and above row `j`.
+    sums: [u16; F],
+    /// Pixel of cell (0, 0).
+    x0: i32,
+    /// See `x0`.
+    y0: i32,
+    /// Pixels between cells.
+    step: i32,
+    cols: i32,
+    rows: i32,
+}
+
+impl<const F: usize> Default for ForegroundMap<F> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl<const F: usize> ForegroundMap<F> {
+    /// An empty map (every box sums to nothing).
+    pub const fn new() -> Self {
+        const {
+            assert!(F <= 4097, "running sums of 4-bit cells fit a u16 up to 4096 cells");
+        }
+        ForegroundMap { sums: [0; F], x0: 0, y0: 0, step: 1, cols: 0, rows: 0 }
+    }
+
+    /// Fills the map over the pixel rectangle `[x0, x1) × [y0, y1)` (clipped
+    /// to the frame) with the odds of each cell's colour.
+    pub(crate) fn compute<const K: usize>(
+        &mut self,
+        frame: &Frame<'_>,
+        rect: (i32, i32, i32, i32),
+        layout: &Layout,
+        fg: &Foreground<K>,
+    ) {
+        let (w, h) = (frame.width() as i32, frame.height() as i32);
+        let (x0, y0) = (rect.0.clamp(0, w), rect.1.clamp(0, h));
+        let (x1, y1) = (rect.2.clamp(x0, w), rect.3.clamp(y0, h));
+        let mut step = 1;
+        let cells = |s: i32| ((x1 - x0 + s - 1) / s + 1) as usize * ((y1 - y0 + s - 1) / s + 1) as usize;
+        while cells(step) > F && step < w.max(h) {
+            step += 1;
+        }
+        let (cols, rows) = ((x1 - x0 + step - 1) / step, (y1 - y0 + step - 1) / step);
+        (self.x0, self.y0, self.step) = (x0, y0, step);
+        if cells(step) > F {
+            (self.cols, self.rows) = (0, 0);
+            return;
+        }
+        (self.cols, self.rows) = (cols, rows);
+        let stride = (cols + 1) as usize;
+        for s in self.sums.iter_mut().take(stride) {
+            *s = 0;
+        }
+        for j in 0..rows {
+            let y = (y0 + j * step) as usize;
+            let mut run = 0u16;
+            let base = (j as usize + 1) * stride;
+            if let Some(s) = self.sums.get_mut(base) {
+                *s = 0;
+            }
+            for i in 0..cols {
+                let x = (x0 + i * step) as usize;
+                let p = frame.rgb(x, y).and_then(|rgb| fg.odds.get(layout.bin(rgb))).copied().unwrap_or(0);
+                run = run.wrapping_add(p as u16);
+                let above = self.sums.get(base - stride + i as usize + 1).copied().unwrap_or(0);
+                if let Some(s) = self.sums.get_mut(base + i as usize + 1) {
+                    *s = above.wrapping_add(run);
+                }
+            }
+        }
+    }
+
+    /// Pixels between the map's cells.
+    pub(crate) fn step(&self) -> i32 {
+        self.step
+    }
+
+    /// The sum and count of the cells whose pixels lie in `[x0, x1) × [y0, y1)`.
+    pub(crate) fn sum(&self, x0: Real, y0: Real, x1: Real, y1: Real) -> (u32, u32) {
+        let s = self.step as Real;
+        // Cells i with x0 <= self.x0 + i·step < x1, clipped to the map.
+        let col = |v: Real, n: i32| -> i32 {
+            let c = (v - self.x0 as Real) / s;
+            let c = crate::scalar::clamp(c, 0.0, n as Real);
+            let f = c as i32;
+            if (f as Real) < c { f + 1 } else { f }
+        };
+        let row = |v: Real, n: i32| -> i32 {
+            let c = (v - self.y0 as Real) / s;
+            let c = crate::scalar::clamp(c, 0.0, n as Real);
+            let f = c as i32;
+            if (f as Real) < c { f + 1 } else { f }
+        };
+        let (i0, i1) = (col(x0, self.cols), col(x1, self.cols));
+        let (j0, j1) = (row(y0, self.rows), row(y1, self.rows));
+        if i1 <= i0 || j1 <= j0 {
+            return (0, 0);
+        }
+        let stride = (self.cols + 1) as usize;
+        let at = |i: i32, j: i32| self.sums.get(j as usize * stride + i as usize).copied().unwrap_or(0);
+        let total = at(i1, j1).wrapping_sub(at(i0, j1)).wrapping_sub(at(i1, j0)).wrapping_add(at(i0, j0));
+        (total as u32, ((i1 - i0) * (j1 - j0)) as u32)
+    }
+
+    /// The contrast of the box of ellipse `e`: its mean odds minus the mean
+    /// odds of the ring out to `ring` times its width and height, in
+    /// `[-1, 1]`; `None` if the map covers no cell of the box or the ring.
+    pub(crate) fn contrast(&self, e: &Ellipse, ring: Real) -> Option<Real> {
+        let (ax, ay) = (e.hx * ring, e.hy * ring);
+        let (si, ni) = self.sum(e.cx - e.hx, e.cy - e.hy, e.cx + e.hx, e.cy + e.hy);
+        let (so, no) = self.sum(e.cx - ax, e.cy - ay, e.cx + ax, e.cy + ay);
+        if ni == 0 || no <= ni {
+            return None;
+        }
+        let inside = si as Real / ni as Real;
+        let around = (so - si) as Real / (no - ni) as Real;
+        Some((inside - around) / LEVELS as Real)
+    }
+
+    /// The mean odds inside the box of ellipse `e`, in `[0, 1]`.
+    pub(crate) fn mean(&self, e: &Ellipse) -> Option<Real> {
+        let (s, n) = self.sum(e.cx - e.hx, e.cy - e.hy, e.cx + e.hx, e.cy + e.hy);
+        (n > 0).then(|| s as Real / (n as Real * LEVELS as Real))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::colour::Binning;
+    use crate::frame::PixelFormat;
+    use crate::histogram::Histogram;
+    use crate::region::Lattice;
+
+    #[test]
+    fn probe_map() {
+        let (w, h) = (120usize, 90usize);
+        let mut px = vec![100u8; w * h * 3];
+        for y in 30..50 {
+            for x in 40..70 {
+                px[(y * w + x) * 3..][..3].copy_from_slice(&[220, 30, 30]);
+            }
+        }
+        let f = Frame::packed(&px, w, h, PixelFormat::Rgb888).unwrap();
+        let e = Ellipse { cx: 55.0, cy: 40.0, hx: 15.0, hy: 10.0 };
+        let layout = Layout::whole(Binning::Rgb8x8x8);
+        let mut hist = Histogram::<512>::new();
+        hist.compute_on(&f, &e, Binning::Rgb8x8x8, Lattice::FULL);
+        let model = Model::from_histogram(&hist).unwrap();
+        let mut fg = Foreground::<512>::new();
+        fg.learn(&f, &e, &layout, &model, 1.0);
+        let mut map = ForegroundMap::<4096>::new();
+        map.compute(&f, (0, 0, 120, 90), &layout, &fg);
+        println!("step {} cols {} rows {}", map.step, map.cols, map.rows);
+        for d in [0.0, 2.0, 5.0, 10.0, 20.0] {
+            let c = Ellipse { cx: 55.0 + d, ..e };
+            println!("{d} mean {:?} contrast {:?}", map.mean(&c), map.contrast(&c, 1.5));
+        }
+    }
+}

@@ -1,0 +1,148 @@
+//! A small grey-level template of the target, compared by normalised
+//! cross-correlation: the cue that sees *where* things are inside the box,
+//! which a histogram does not.
+//!
+//! The target box is read on a `G × G` grid of luma samples (each the mean
+//! of a 2 × 2 block of pixels at the grid point, which tames aliasing when
+//! the box is much larger than the grid). A candidate box is read the same
+//! way, at its own size, so the comparison also penalises a wrong scale or
+//! aspect. The score is the Pearson correlation of the two sample vectors,
+//! in `[-1, 1]`: insensitive to brightness and contrast changes, high only
+//! when the layout of light and dark matches.
+
+use crate::frame::{Frame, luma};
+use crate::geometry::Ellipse;
+use crate::scalar::{Real, sqrt};
+
+/// Samples per side of the template grid.
+pub const GRID: usize = 8;
+
+/// Samples of a template.
+const SAMPLES: usize = GRID * GRID;
+
+/// A grey-level template: `GRID × GRID` luma samples with their sums.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Template {
+    samples: [u8; SAMPLES],
+    /// Sum and sum of squares of `samples`.
+    sum: u32,
+    sum2: u32,
+    /// Whether the template holds a learnt patch.
+    valid: bool,
+}
+
+impl Default for Template {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// A sampled candidate: the samples and their sums.
+struct Patch {
+    samples: [u8; SAMPLES],
+    sum: u32,
+    sum2: u32,
+}
+
+impl Template {
+    /// An empty template (matches nothing).
+    pub const fn new() -> Self {
+        Template { samples: [0; SAMPLES], sum: 0, sum2: 0, valid: false }
+    }
+
+    /// Learns the template of the box of `e`.
+    pub(crate) fn learn(&mut self, frame: &Frame<'_>, e: &Ellipse) {
+        let p = sample(frame, e);
+        (self.samples, self.sum, self.sum2, self.valid) = (p.samples, p.sum, p.sum2, true);
+    }
+
+    /// Blends the box of `e` into the template: `t ← (1 − rate) t + rate · c`.
+    pub(crate) fn blend(&mut self, frame: &Frame<'_>, e: &Ellipse, rate: Real) {
+        if !self.valid {
+            return self.learn(frame, e);
+        }
+        let p = sample(frame, e);
+        let a = (crate::scalar::clamp(rate, 0.0, 1.0) * 256.0) as u32;
+        let (mut sum, mut sum2) = (0u32, 0u32);
+        for (t, &c) in self.samples.iter_mut().zip(p.samples.iter()) {
+            let v = (((256 - a) * *t as u32 + a * c as u32 + 128) >> 8).min(255);
+            *t = v as u8;
+            sum += v;
+            sum2 += v * v;
+        }
+        (self.sum, self.sum2) = (sum, sum2);
+    }
+
+    /// The normalised cross-correlation of the box of `e` with the
+    /// template, in `[-1, 1]`; 0 for a flat template or patch (no layout to
+    /// compare) or before anything was learnt.
+    pub fn correlation(&self, frame: &Frame<'_>, e: &Ellipse) -> Real {
+        if !self.valid {
+            return 0.0;
+        }
+        let p = sample(frame, e);
+        let dot: u32 = self.samples.iter().zip(p.samples.iter()).map(|(&t, &c)| t as u32 * c as u32).sum();
+        let n = SAMPLES as i64;
+        let num = n * dot as i64 - self.sum as i64 * p.sum as i64;
+        let vt = n * self.sum2 as i64 - (self.sum as i64) * (self.sum as i64);
+        let vc = n * p.sum2 as i64 - (p.sum as i64) * (p.sum as i64);
+        if vt <= 0 || vc <= 0 {
+            return 0.0;
+        }
+        let den = sqrt(vt as Real) * sqrt(vc as Real);
+        crate::scalar::clamp(num as Real / den, -1.0, 1.0)
+    }
+}
+
+/// Reads the box of `e` on the template grid: each sample is the mean luma
+/// of its cell of the box (so the correlation falls off smoothly, over
+/// about a cell, as a candidate moves off the target).
+fn sample(frame: &Frame<'_>, e: &Ellipse) -> Patch {
+    let mut p = Patch { samples: [0; SAMPLES], sum: 0, sum2: 0 };
+    let (w, h) = (frame.width() as i32, frame.height() as i32);
+    let (cw, ch) = (2.0 * e.hx / GRID as Real, 2.0 * e.hy / GRID as Real);
+    let (bx, by) = (e.cx - e.hx, e.cy - e.hy);
+    for j in 0..GRID {
+        let ya = crate::region::floor(by + j as Real * ch);
+        let yb = crate::region::floor(by + (j + 1) as Real * ch).max(ya + 1);
+        for i in 0..GRID {
+            let xa = crate::region::floor(bx + i as Real * cw);
+            let xb = crate::region::floor(bx + (i + 1) as Real * cw).max(xa + 1);
+            let (mut s, mut n) = (0u32, 0u32);
+            for y in ya..yb {
+                for x in xa..xb {
+                    let (x, y) = (x.clamp(0, w - 1) as usize, y.clamp(0, h - 1) as usize);
+                    s += frame.rgb(x, y).map_or(0, |c| luma(c) as u32);
+                    n += 1;
+                }
+            }
+            let v = (s + n / 2) / n.max(1);
+            if let Some(t) = p.samples.get_mut(j * GRID + i) {
+                *t = v as u8;
+            }
+            p.sum += v;
+            p.sum2 += v * v;
+        }
+    }
+    p
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::PixelFormat;
+
+    #[test]
+    fn probe() {
+        let (w, h) = (120usize, 90usize);
+        let mut next = crate::testing::lcg(3);
+        let px: Vec<u8> = (0..w * h * 3).map(|_| (next() >> 24) as u8).collect();
+        let f = Frame::packed(&px, w, h, PixelFormat::Rgb888).unwrap();
+        let e = Ellipse { cx: 60.0, cy: 45.0, hx: 16.0, hy: 12.0 };
+        let mut t = Template::new();
+        t.learn(&f, &e);
+        for d in [0.0, 0.5, 1.0, 2.0, 4.0, 8.0] {
+            println!("{d} {}", t.correlation(&f, &Ellipse { cx: 60.0 + d, ..e }));
+        }
+    }
+}
