@@ -40,7 +40,13 @@ pub struct Foreground<const K: usize> {
     around: [u16; K],
     /// `P(target | bin)` in `0..=LEVELS`.
     odds: [u8; K],
+    /// Whether anything was learnt.
+    learnt: bool,
 }
+
+/// How far the ring a box's contrast is taken against extends: to this
+/// many times the box's width and height (1.25 box areas of ring).
+pub const RING: Real = 1.5;
 
 /// Added to both histograms' bins (units of `2^-16`) so that a colour seen
 /// in neither is even odds and one seen a little in one of them is not
@@ -50,7 +56,13 @@ const PRIOR: u32 = 64;
 impl<const K: usize> Foreground<K> {
     /// Even odds everywhere (nothing learnt).
     pub(crate) const fn new() -> Self {
-        Foreground { around: [0; K], odds: [(LEVELS as u8).div_ceil(2); K] }
+        Foreground { around: [0; K], odds: [(LEVELS as u8).div_ceil(2); K], learnt: false }
+    }
+
+    /// Whether surroundings have been learnt (the tracker learns them only
+    /// for the techniques that use them).
+    pub fn is_learnt(&self) -> bool {
+        self.learnt
     }
 
     /// `P(target | bin)` of every bin, in `0..=LEVELS`.
@@ -65,6 +77,9 @@ impl<const K: usize> Foreground<K> {
         let mut counts = [0u32; K];
         let total = ring_histogram(frame, e, layout, &mut counts);
         if total > 0 {
+            // The first surroundings replace the even odds outright.
+            let rate = if self.learnt { rate } else { 1.0 };
+            self.learnt = true;
             let a = (crate::scalar::clamp(rate, 0.0, 1.0) * 65536.0) as u64;
             for (b, &c) in self.around.iter_mut().zip(counts.iter()) {
                 let new = (c as u64 * 65536 / total as u64).min(65535);
@@ -76,8 +91,8 @@ impl<const K: usize> Foreground<K> {
 
     /// Recomputes the odds from the target model's bins and the surroundings.
     pub(crate) fn refresh(&mut self, model: &Model<K>) {
-        for ((o, &q), &b) in self.odds.iter_mut().zip(model.bins().iter()).zip(self.around.iter()) {
-            let (q, b) = (q as u32 + PRIOR, b as u32 + PRIOR);
+        for (u, (o, &b)) in self.odds.iter_mut().zip(self.around.iter()).enumerate() {
+            let (q, b) = (model.whole_bin(u) + PRIOR, b as u32 + PRIOR);
             *o = ((LEVELS * q + (q + b) / 2) / (q + b)) as u8;
         }
     }
@@ -210,6 +225,22 @@ impl<const F: usize> ForegroundMap<F> {
         }
     }
 
+    /// Fills the map over the box of `e` grown `reach` times in width and
+    /// height (with a pixel's margin).
+    pub(crate) fn compute_around<const K: usize>(
+        &mut self,
+        frame: &Frame<'_>,
+        e: &Ellipse,
+        reach: Real,
+        layout: &Layout,
+        fg: &Foreground<K>,
+    ) {
+        let f = crate::region::floor;
+        let (ax, ay) = (reach * e.hx, reach * e.hy);
+        let rect = (f(e.cx - ax) - 1, f(e.cy - ay) - 1, f(e.cx + ax) + 2, f(e.cy + ay) + 2);
+        self.compute(frame, rect, layout, fg);
+    }
+
     /// Pixels between the map's cells.
     pub(crate) fn step(&self) -> i32 {
         self.step
@@ -255,12 +286,6 @@ impl<const F: usize> ForegroundMap<F> {
         let inside = si as Real / ni as Real;
         let around = (so - si) as Real / (no - ni) as Real;
         Some((inside - around) / LEVELS as Real)
-    }
-
-    /// The mean odds inside the box of ellipse `e`, in `[0, 1]`.
-    pub(crate) fn mean(&self, e: &Ellipse) -> Option<Real> {
-        let (s, n) = self.sum(e.cx - e.hx, e.cy - e.hy, e.cx + e.hx, e.cy + e.hy);
-        (n > 0).then(|| s as Real / (n as Real * LEVELS as Real))
     }
 }
 

@@ -784,14 +784,20 @@ impl<const K: usize> Model<K> {
     /// of `q(u) · w(u)`, renormalised, while `q` itself stays unweighted
     /// for blending (background-weighted histograms, CBWH).
     pub(crate) fn reweight(&mut self, w: &[u8; K]) {
-        let total: u64 = self.q.iter().zip(w.iter()).map(|(&q, &w)| q as u64 * w as u64).sum();
-        if total == 0 {
-            self.refresh_roots();
-            return;
-        }
-        for ((s, &q), &w) in self.sqrt_q.iter_mut().zip(self.q.iter()).zip(w.iter()) {
-            let v = ((q as u64 * w as u64 * Q_ONE + total / 2) / total).min(u16::MAX as u64) as u32;
-            *s = crate::scalar::isqrt(v << 8) as u16;
+        // Each segment's bin u takes the weight of colour bin u.
+        let len = self.segment_len();
+        let weight = |i: usize| w.get(i % len).copied().unwrap_or(0) as u64;
+        for (j, (sq, q)) in self.sqrt_q.chunks_mut(len).zip(self.q.chunks(len)).enumerate() {
+            let total: u64 = q.iter().enumerate().map(|(u, &q)| q as u64 * weight(j * len + u)).sum();
+            for (u, (s, &q)) in sq.iter_mut().zip(q.iter()).enumerate() {
+                // A segment whose colours all belong to the surroundings keeps its plain roots.
+                let v = if total == 0 {
+                    (q as u32) << 8
+                } else {
+                    (((q as u64 * weight(j * len + u) * Q_ONE + total / 2) / total).min(u16::MAX as u64) as u32) << 8
+                };
+                *s = crate::scalar::isqrt(v) as u16;
+            }
         }
         self.support = Support::of(&self.sqrt_q);
     }
@@ -802,6 +808,15 @@ impl<const K: usize> Model<K> {
             *s = crate::scalar::isqrt((q as u32) << 8) as u16;
         }
         self.support = Support::of(&self.sqrt_q);
+    }
+
+    /// Bin `u` of the whole target's distribution, in units of `2^-16`:
+    /// the mean over the segments of their bin `u` (bin `u` itself for a
+    /// model of one segment).
+    pub(crate) fn whole_bin(&self, u: usize) -> u32 {
+        let len = self.segment_len();
+        let sum: u32 = (0..self.segments as usize).filter_map(|s| self.q.get(s * len + u)).map(|&q| q as u32).sum();
+        sum / self.segments.max(1) as u32
     }
 
     /// The normalised bins, in units of `2^-16`.

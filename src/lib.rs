@@ -68,7 +68,7 @@ mod testing;
 pub mod tracker;
 
 pub use colour::Binning;
-pub use config::{BoundaryCue, Config, EdgeCue, ModelUpdate, SizeSearch, TableMode, TemplateCue};
+pub use config::{BoundaryCue, Config, EdgeCue, Life, ModelUpdate, SizeSearch, TableMode, TemplateCue};
 pub use edges::{EdgeMap, EdgeParams};
 pub use error::{ConfigError, Error, FrameError, ParamProblem, RegionError};
 pub use filter::{Dynamics, Particle, Resampling};
@@ -79,4 +79,4 @@ pub use likelihood::{Combination, Likelihood, Shape, Sigma};
 pub use meanshift::{MeanShift, MeanShiftConfig, Prediction};
 pub use region::Sampling;
 pub use scalar::Real;
-pub use tracker::{Diagnostics, Estimate, Event, ScalePrior, Trace, TrackState, Tracker};
+pub use tracker::{Diagnostics, Estimate, on_target, Event, ScalePrior, Trace, TrackState, Tracker};

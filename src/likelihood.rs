@@ -105,6 +105,7 @@ impl Likelihood {
     pub fn sigma_for(&self, d2_min: Real) -> Real {
         match self.sigma {
             Sigma::Fixed(s) => s,
+            // Needs the spread too: see `sigma_and_offset`.
             Sigma::Spread { min, .. } => min,
             Sigma::Adaptive { min, max } => {
                 let d2 = d2_min.max(0.0);
@@ -114,6 +115,23 @@ impl Likelihood {
                 };
                 crate::scalar::clamp(s, min, max)
             }
+        }
+    }
+
+    /// The σ for a frame whose best particle is at squared distance
+    /// `d2_min` and whose particles average `d2_mean`, and the offset to
+    /// take off every particle's squared distance before
+    /// [`Likelihood::weight`]. The offset is 0 except for [`Sigma::Spread`],
+    /// which measures distances from the best particle's, less `2σ²`, so
+    /// that the best particle gets `log L = −1` in every mode.
+    pub fn sigma_and_offset(&self, d2_min: Real, d2_mean: Real) -> (Real, Real) {
+        match self.sigma {
+            Sigma::Spread { spread, min, max } => {
+                let s2 = (d2_mean - d2_min).max(0.0) / (2.0 * spread);
+                let sigma = crate::scalar::clamp(crate::scalar::sqrt(s2), min, max);
+                (sigma, d2_min - 2.0 * sigma * sigma)
+            }
+            _ => (self.sigma_for(d2_min), 0.0),
         }
     }
 

@@ -2,7 +2,9 @@
 //! and ablation runs. Every key names a [`pftrack::Config`] field; values are
 //! validated by the core afterwards, so this only parses.
 
-use pftrack::{Binning, Combination, Config, EdgeCue, ModelUpdate, Resampling, Sampling, Shape, Sigma, Similarity};
+use pftrack::{
+    Binning, Combination, Config, EdgeCue, Life, ModelUpdate, Resampling, Sampling, Shape, Sigma, Similarity, SizeSearch,
+};
 
 /// The keys `apply` understands, with what they set.
 pub const KEYS: &[(&str, &str)] = &[
@@ -20,7 +22,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ("table", "off | SPACING (likelihood-table mode, grid spacing in px)"),
     ("sigma", "fixed σ, e.g. 0.2"),
     ("adaptive_sigma", "MIN:MAX, e.g. 0.02:0.5 (σ chosen per frame)"),
-    ("spread_sigma", "SPREAD:MIN:MAX, e.g. 2:0.005:0.5 (σ from the particles' spread)"),
+    ("spread_sigma", "SPREAD:MIN:MAX, e.g. 8:0.005:0.5 (σ from the particles' spread)"),
     ("eps", "likelihood floor ε"),
     ("position_noise", "fraction of target size per frame"),
     ("velocity_noise", "fraction of target size per frame"),
@@ -37,15 +39,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ("reseed_fraction", "fraction re-drawn per frame while searching"),
     ("min_half_axis", "pixels"),
     ("template", "off | WEIGHT:RATE (grey template cue, NCC, share WEIGHT, adaptation RATE)"),
-    ("foreground", "off | WEIGHT[:contrast] (per-particle P(target|colour) cue)"),
-    ("anchor", "on | off (appearance, confidence and update gate against the first model)"),
-    ("diagnose", "on | off (learn every model the diagnostics read)"),
-    ("aware", "off | LOST:FOUND[:redetect] (confidence-driven life cycle)"),
     ("weighted_model", "on | off (colour model weighted against the surroundings, CBWH)"),
-    (
-        "size",
-        "off | STEP:RING:RATE:SIMILARITY[:scale] (size search against the surroundings, e.g. 0.05:1.5:0.05:1; scale: no aspect change)",
-    ),
 ];
 
 fn num(key: &str, v: &str) -> Result<f32, String> {
@@ -178,6 +172,15 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
         "lost_after" => c.lost_after = v.parse().map_err(|_| format!("lost_after: `{v}` is not a whole number"))?,
         "reseed_fraction" => c.reseed_fraction = num(key, v)?,
         "min_half_axis" => c.min_half_axis = num(key, v)?,
+        "weighted_model" => c.weighted_model = choice(key, v, &[("on", true), ("off", false)])?,
+        "size" => {
+            c.size = match v.split(':').collect::<Vec<_>>().as_slice() {
+                ["off"] => None,
+                [step, sim] => Some(SizeSearch { step: num(key, step)?, similarity: num(key, sim)?, aspect: true }),
+                [step, sim, "scale"] => Some(SizeSearch { step: num(key, step)?, similarity: num(key, sim)?, aspect: false }),
+                _ => return Err(format!("{key}: `{v}`: expected off or STEP:SIMILARITY[:scale]")),
+            }
+        }
         "template" => {
             c.template = if v == "off" {
                 None
@@ -186,51 +189,17 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
                 Some(pftrack::TemplateCue { weight: num(key, w)?, rate: num(key, r)? })
             }
         }
-        "foreground" => {
-            c.foreground_cue = match v.split_once(':') {
-                _ if v == "off" => None,
-                Some((w, "contrast")) => Some(pftrack::config::ForegroundCue { weight: num(key, w)?, contrast: true }),
-                None => Some(pftrack::config::ForegroundCue { weight: num(key, v)?, contrast: false }),
-                _ => return Err(format!("{key}: `{v}`: expected off or WEIGHT[:contrast]")),
-            }
-        }
-        "anchor" => c.anchor = choice(key, v, &[("on", true), ("off", false)])?,
-        "diagnose" => c.diagnose = choice(key, v, &[("on", true), ("off", false)])?,
-        "aware" => {
-            let p: Vec<&str> = v.split(':').collect();
-            c.aware = match p.as_slice() {
-                ["off"] => None,
-                [l, f] => Some(pftrack::config::Aware {
-                    lost_below: num(key, l)?,
-                    found_above: num(key, f)?,
-                    redetect: false,
-                }),
-                [l, f, "redetect"] => {
-                    Some(pftrack::config::Aware { lost_below: num(key, l)?, found_above: num(key, f)?, redetect: true })
+        "life" => {
+            c.life = match v.split(':').collect::<Vec<_>>().as_slice() {
+                ["appearance"] => Life::Appearance,
+                ["confidence", lost, found] => {
+                    Life::Confidence { lost_below: num(key, lost)?, found_above: num(key, found)? }
                 }
-                _ => return Err(format!("{key}: `{v}`: expected off or LOST:FOUND[:redetect]")),
-            };
-        }
-        "weighted_model" => c.weighted_model = choice(key, v, &[("on", true), ("off", false)])?,
-        "size" => {
-            c.size = if v == "off" {
-                None
-            } else {
-                let parts: Vec<&str> = v.split(':').collect();
-                let (nums, aspect) = match parts.as_slice() {
-                    [a, b, r, w] => ([*a, *b, *r, *w], true),
-                    [a, b, r, w, "scale"] => ([*a, *b, *r, *w], false),
-                    _ => return Err(format!("{key}: `{v}`: expected off or STEP:RING:RATE:SIMILARITY[:scale]")),
-                };
-                Some(pftrack::SizeSearch {
-                    step: num(key, nums[0])?,
-                    ring: num(key, nums[1])?,
-                    rate: num(key, nums[2])?,
-                    similarity: num(key, nums[3])?,
-                    aspect,
-                })
+                _ => return Err(format!("{key}: `{v}`: expected appearance or confidence:LOST:FOUND")),
             }
         }
+        "redetect" => c.redetect = choice(key, v, &[("on", true), ("off", false)])?,
+        "surroundings_rate" => c.surroundings_rate = num(key, v)?,
         _ => {
             let known: Vec<&str> = KEYS.iter().map(|(k, _)| *k).collect();
             return Err(format!("unknown setting `{key}`; known: {}", known.join(", ")));

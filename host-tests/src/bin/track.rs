@@ -47,9 +47,10 @@ struct Common {
     /// (repeatable; an unknown key lists the known ones).
     #[arg(long = "set", value_name = "KEY=VALUE")]
     set: Vec<String>,
-    /// Also append every frame's diagnostics to this CSV file (sequence,
-    /// frame, IoU with the truth, state, confidence, then the tracker's
-    /// internal signals), for studying failure detection.
+    /// Also append every frame's confidence and the signals behind it to
+    /// this CSV file: sequence, frame, IoU with the truth, tracking (1 or
+    /// 0), confidence, contrast, correlation, anchored similarity,
+    /// similarity (see `tools/fit-confidence`).
     #[arg(long)]
     dump: Option<PathBuf>,
 }
@@ -353,22 +354,16 @@ fn run_one(path: &Path, common: &Common) -> Result<(Row, Vec<BoundingBox>, Vec<B
         for (i, ((e, d), b)) in run.estimates.iter().zip(&run.diagnostics).zip(run.boxes.iter().skip(1)).enumerate() {
             let Some(t) = seq.truth.get(i + 1).filter(|t| has_target(t)) else { continue };
             text += &format!(
-                "{},{},{:.4},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{}\n",
+                "{},{},{:.4},{},{:.4},{:.4},{:.4},{:.4},{:.4}\n",
                 seq.name,
                 i + 2,
                 b.iou(t),
                 (e.state == TrackState::Tracking) as u8,
                 e.confidence,
-                d.rho,
-                d.anchored,
-                d.sim,
                 d.contrast,
-                d.spread,
-                d.ess,
-                d.best,
-                d.mean,
-                d.ncc,
-                e.appearing
+                d.correlation,
+                d.anchored,
+                d.similarity,
             );
         }
         f.write_all(text.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
