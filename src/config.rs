@@ -161,7 +161,8 @@ pub struct TemplateCue {
 /// their similarity with the models; the best becomes the estimate, and the
 /// particles are rescaled with it. Contrast penalises a box too large (it
 /// takes in background), the model similarity one too small (it leaves out
-/// colours the model has).
+/// colours the model has). There is no search in table mode, whose size is
+/// fixed, nor on a step given a [`crate::ScalePrior`], which sets the size.
 #[derive(Copy, Clone, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SizeSearch {
@@ -309,6 +310,12 @@ fn positive(field: &'static str, v: Real, hi: Real) -> Result<(), ConfigError> {
 }
 
 impl Config {
+    /// Whether some technique reads the surroundings' colours (see
+    /// [`crate::foreground`]), so that the tracker learns them.
+    pub fn uses_surroundings(&self) -> bool {
+        self.life != Life::Appearance || self.size.is_some() || self.weighted_model || self.redetect
+    }
+
     /// Checks every field against its documented range.
     pub fn validate(&self) -> Result<(), ConfigError> {
         match self.likelihood.sigma {

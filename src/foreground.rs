@@ -114,11 +114,12 @@ fn ring_histogram<const K: usize>(frame: &Frame<'_>, e: &Ellipse, layout: &Layou
         let mut x = outer.0;
         while x < outer.2 {
             let inside = x >= inner.0 && x < inner.2 && y >= inner.1 && y < inner.3;
-            if !inside && let Some(rgb) = frame.rgb(x as usize, y as usize) {
-                if let Some(c) = counts.get_mut(layout.bin(rgb)) {
-                    *c += 1;
-                    n += 1;
-                }
+            if !inside
+                && let Some(rgb) = frame.rgb(x as usize, y as usize)
+                && let Some(c) = counts.get_mut(layout.bin(rgb))
+            {
+                *c += 1;
+                n += 1;
             }
             x += step;
         }
@@ -297,29 +298,103 @@ mod tests {
     use crate::histogram::Histogram;
     use crate::region::Lattice;
 
-    #[test]
-    fn probe_map() {
-        let (w, h) = (120usize, 90usize);
-        let mut px = vec![100u8; w * h * 3];
+    const W: usize = 120;
+    const H: usize = 90;
+    const RED: [u8; 3] = [220, 30, 30];
+    const GREY: [u8; 3] = [100, 100, 100];
+
+    /// A grey frame with a red 30x20 box at (40, 30).
+    fn scene() -> Vec<u8> {
+        let mut px = [GREY; W * H].concat();
         for y in 30..50 {
             for x in 40..70 {
-                px[(y * w + x) * 3..][..3].copy_from_slice(&[220, 30, 30]);
+                px[(y * W + x) * 3..][..3].copy_from_slice(&RED);
             }
         }
-        let f = Frame::packed(&px, w, h, PixelFormat::Rgb888).unwrap();
-        let e = Ellipse { cx: 55.0, cy: 40.0, hx: 15.0, hy: 10.0 };
-        let layout = Layout::whole(Binning::Rgb8x8x8);
+        px
+    }
+
+    fn learnt(f: &Frame<'_>, e: &Ellipse) -> Foreground<512> {
         let mut hist = Histogram::<512>::new();
-        hist.compute_on(&f, &e, Binning::Rgb8x8x8, Lattice::FULL);
+        hist.compute_on(f, e, Binning::Rgb8x8x8, Lattice::FULL);
         let model = Model::from_histogram(&hist).unwrap();
         let mut fg = Foreground::<512>::new();
-        fg.learn(&f, &e, &layout, &model, 1.0);
+        fg.learn(f, e, &Layout::whole(Binning::Rgb8x8x8), &model, 0.25);
+        fg
+    }
+
+    #[test]
+    fn odds_of_target_surrounding_and_unseen_colours() {
+        // Reason: by hand. The ellipse inscribed in the red box sees only
+        // red, so q(red) = 1 (65536 units) and q(grey) = 0; the ring around
+        // the box is all grey, so b(grey) = 1 and b(red) = 0. With the prior
+        // of 64 units: P(red) = 15 · 65600 / 65664 = 14.99 -> 15,
+        // P(grey) = 15 · 64 / 65664 -> 0, and a colour seen in neither is
+        // 15 · 64 / 128 = 7.5 -> 8 (even odds, rounded half up). The first
+        // surroundings replace the even odds whatever the rate.
+        let px = scene();
+        let f = Frame::packed(&px, W, H, PixelFormat::Rgb888).unwrap();
+        let e = Ellipse { cx: 55.0, cy: 40.0, hx: 15.0, hy: 10.0 };
+        let fg = learnt(&f, &e);
+        assert!(fg.is_learnt());
+        let bin = |c| Binning::Rgb8x8x8.bin(c);
+        assert_eq!(fg.odds()[bin(RED)], 15);
+        assert_eq!(fg.odds()[bin(GREY)], 0);
+        assert_eq!(fg.odds()[bin([0, 255, 0])], 8);
+        assert!(!Foreground::<512>::new().is_learnt());
+    }
+
+    #[test]
+    fn box_sums_match_a_direct_count() {
+        // Reason: cross-check of the running sums against summing the cells
+        // one by one, for random boxes (partly off the map included), on a
+        // random frame and a map coarse enough to need a lattice step > 1.
+        let mut next = crate::testing::lcg(11);
+        let px: Vec<u8> = (0..W * H * 3).map(|_| (next() >> 24) as u8).collect();
+        let f = Frame::packed(&px, W, H, PixelFormat::Rgb888).unwrap();
+        let e = Ellipse { cx: 60.0, cy: 45.0, hx: 10.0, hy: 8.0 };
+        let fg = learnt(&f, &e);
+        let layout = Layout::whole(Binning::Rgb8x8x8);
+        let mut map = ForegroundMap::<1024>::new();
+        map.compute(&f, (7, 5, 113, 88), &layout, &fg);
+        assert!(map.step() >= 2, "the rectangle needs more than 1024 sums at step 1");
+        let cell = |x: i32, y: i32| fg.odds()[layout.bin(f.rgb(x as usize, y as usize).unwrap())] as u32;
+        for _ in 0..300 {
+            let mut r = || (next() >> 16) as f32 / 65536.0;
+            let (x0, y0) = (r() * 140.0 - 10.0, r() * 110.0 - 10.0);
+            let (x1, y1) = (x0 + r() * 60.0, y0 + r() * 50.0);
+            let (mut want, mut n) = (0u32, 0u32);
+            for j in 0..map.rows {
+                for i in 0..map.cols {
+                    let (x, y) = (map.x0 + i * map.step, map.y0 + j * map.step);
+                    if (x as f32) >= x0 && (x as f32) < x1 && (y as f32) >= y0 && (y as f32) < y1 {
+                        want += cell(x, y);
+                        n += 1;
+                    }
+                }
+            }
+            assert_eq!(map.sum(x0, y0, x1, y1), if n == 0 { (0, 0) } else { (want, n) }, "box {x0},{y0} {x1},{y1}");
+        }
+    }
+
+    #[test]
+    fn the_true_box_has_the_best_contrast() {
+        // Reason: the geometry of contrast. Inside the true box every cell is
+        // red (odds 15) and the ring around it is all grey (odds 0): contrast
+        // 1, the most there is. A larger box takes in grey, a smaller one
+        // leaves red in its ring, a shifted one both: each scores less.
+        let px = scene();
+        let f = Frame::packed(&px, W, H, PixelFormat::Rgb888).unwrap();
+        let e = Ellipse { cx: 55.0, cy: 40.0, hx: 15.0, hy: 10.0 };
+        let fg = learnt(&f, &e);
         let mut map = ForegroundMap::<4096>::new();
-        map.compute(&f, (0, 0, 120, 90), &layout, &fg);
-        println!("step {} cols {} rows {}", map.step, map.cols, map.rows);
-        for d in [0.0, 2.0, 5.0, 10.0, 20.0] {
-            let c = Ellipse { cx: 55.0 + d, ..e };
-            println!("{d} mean {:?} contrast {:?}", map.mean(&c), map.contrast(&c, 1.5));
+        map.compute_around(&f, &e, 2.0 * RING, &Layout::whole(Binning::Rgb8x8x8), &fg);
+        let at = |dx: f32, fx: f32, fy: f32| {
+            map.contrast(&Ellipse { cx: e.cx + dx, hx: e.hx * fx, hy: e.hy * fy, ..e }, RING).unwrap()
+        };
+        assert_eq!(at(0.0, 1.0, 1.0), 1.0);
+        for (dx, fx, fy) in [(0.0, 1.2, 1.0), (0.0, 0.8, 1.0), (0.0, 1.0, 1.2), (0.0, 1.0, 0.8), (3.0, 1.0, 1.0)] {
+            assert!(at(dx, fx, fy) < 0.95, "shift {dx}, scale {fx} x {fy}: {}", at(dx, fx, fy));
         }
     }
 }

@@ -791,10 +791,9 @@ impl<const K: usize> Model<K> {
             let total: u64 = q.iter().enumerate().map(|(u, &q)| q as u64 * weight(j * len + u)).sum();
             for (u, (s, &q)) in sq.iter_mut().zip(q.iter()).enumerate() {
                 // A segment whose colours all belong to the surroundings keeps its plain roots.
-                let v = if total == 0 {
-                    (q as u32) << 8
-                } else {
-                    (((q as u64 * weight(j * len + u) * Q_ONE + total / 2) / total).min(u16::MAX as u64) as u32) << 8
+                let v = match (q as u64 * weight(j * len + u) * Q_ONE + total / 2).checked_div(total) {
+                    Some(v) => (v.min(u16::MAX as u64) as u32) << 8,
+                    None => (q as u32) << 8,
                 };
                 *s = crate::scalar::isqrt(v) as u16;
             }

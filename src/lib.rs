@@ -31,14 +31,22 @@
 //!
 //! # Example
 //! ```
-//! use pftrack::{BoundingBox, Config, Frame, PixelFormat, Tracker};
+//! use pftrack::{BoundingBox, Config, Frame, PixelFormat, TrackState, Tracker};
 //!
-//! let pixels = [0u8; 32 * 24 * 2]; // a black RGB565 QQQVGA frame
-//! let frame = Frame::new(&pixels, 32, 24, 64, PixelFormat::Rgb565)?;
-//! let mut tracker: Tracker<20> = Tracker::new(Config::default(), 7)?;
-//! tracker.init(&frame, BoundingBox::new(8.0, 6.0, 10.0, 8.0))?;
+//! // A grey 64x48 RGB888 frame with a red 12x10 target at (20, 15).
+//! let mut pixels = [120u8; 64 * 48 * 3];
+//! for y in 15..25 {
+//!     for x in 20..32 {
+//!         pixels[(y * 64 + x) * 3..][..3].copy_from_slice(&[220, 30, 30]);
+//!     }
+//! }
+//! let frame = Frame::packed(&pixels, 64, 48, PixelFormat::Rgb888)?;
+//! let mut tracker: Tracker<50> = Tracker::new(Config::default(), 7)?;
+//! tracker.init(&frame, BoundingBox::new(20.0, 15.0, 12.0, 10.0))?;
 //! let estimate = tracker.step(&frame)?;
-//! assert!(estimate.confidence > 0.99); // black matches black
+//! assert_eq!(estimate.state, TrackState::Tracking);
+//! // The target stands out from its surroundings and matches what was learnt.
+//! assert!(estimate.confidence > 0.9);
 //! # Ok::<(), pftrack::Error>(())
 //! ```
 #![cfg_attr(not(test), no_std)]
@@ -79,4 +87,4 @@ pub use likelihood::{Combination, Likelihood, Shape, Sigma};
 pub use meanshift::{MeanShift, MeanShiftConfig, Prediction};
 pub use region::Sampling;
 pub use scalar::Real;
-pub use tracker::{Diagnostics, Estimate, on_target, Event, ScalePrior, Trace, TrackState, Tracker};
+pub use tracker::{Diagnostics, Estimate, Event, ScalePrior, Trace, TrackState, Tracker, on_target};

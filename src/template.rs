@@ -132,17 +132,69 @@ mod tests {
     use super::*;
     use crate::frame::PixelFormat;
 
+    const W: usize = 120;
+    const H: usize = 90;
+
+    fn noise(seed: u32) -> Vec<u8> {
+        let mut next = crate::testing::lcg(seed);
+        (0..W * H).map(|_| 40 + (next() >> 24) as u8 / 2).collect()
+    }
+
     #[test]
-    fn probe() {
-        let (w, h) = (120usize, 90usize);
-        let mut next = crate::testing::lcg(3);
-        let px: Vec<u8> = (0..w * h * 3).map(|_| (next() >> 24) as u8).collect();
-        let f = Frame::packed(&px, w, h, PixelFormat::Rgb888).unwrap();
+    fn correlation_is_one_on_the_template_and_ignores_gain_and_offset() {
+        // Reason: the definition of Pearson's correlation. The same patch
+        // correlates 1 with itself; a patch whose grey levels are
+        // v / 2 + 10 correlates 1 too (up to rounding: each pixel within
+        // ±0.5 of v / 2 + 10, each cell mean within ±0.5 more); a flat patch has no layout
+        // to compare and scores 0.
+        let px = noise(3);
+        let f = Frame::packed(&px, W, H, PixelFormat::Gray8).unwrap();
         let e = Ellipse { cx: 60.0, cy: 45.0, hx: 16.0, hy: 12.0 };
         let mut t = Template::new();
+        assert_eq!(t.correlation(&f, &e), 0.0, "nothing learnt yet");
         t.learn(&f, &e);
-        for d in [0.0, 0.5, 1.0, 2.0, 4.0, 8.0] {
-            println!("{d} {}", t.correlation(&f, &Ellipse { cx: 60.0 + d, ..e }));
-        }
+        assert!((t.correlation(&f, &e) - 1.0).abs() < 1e-5);
+        let brighter: Vec<u8> = px.iter().map(|&v| v / 2 + 10).collect();
+        let g = Frame::packed(&brighter, W, H, PixelFormat::Gray8).unwrap();
+        assert!(t.correlation(&g, &e) > 0.99, "{}", t.correlation(&g, &e));
+        let flat = vec![90u8; W * H];
+        assert_eq!(t.correlation(&Frame::packed(&flat, W, H, PixelFormat::Gray8).unwrap(), &e), 0.0);
+    }
+
+    #[test]
+    fn correlation_falls_off_over_about_a_cell() {
+        // Reason: the samples are cell means, so a shift by a fraction of a
+        // cell (4 px here) keeps most of the correlation and a shift by two
+        // cells of independent noise leaves little (cells of independent
+        // noise correlate 0 in expectation; 64 of them, within about ±0.3).
+        let px = noise(5);
+        let f = Frame::packed(&px, W, H, PixelFormat::Gray8).unwrap();
+        let e = Ellipse { cx: 60.0, cy: 45.0, hx: 16.0, hy: 16.0 };
+        let mut t = Template::new();
+        t.learn(&f, &e);
+        let at = |dx: f32| t.correlation(&f, &Ellipse { cx: e.cx + dx, ..e });
+        assert!(at(1.0) > 0.6, "{}", at(1.0));
+        assert!(at(1.0) > at(2.0) && at(2.0) > at(4.0), "{} {} {}", at(1.0), at(2.0), at(4.0));
+        assert!(at(8.0).abs() < 0.35, "{}", at(8.0));
+    }
+
+    #[test]
+    fn blending_at_rate_zero_keeps_and_at_one_replaces() {
+        // Reason: t ← (1 − rate) t + rate · c at the ends of the range.
+        let (a, b) = (noise(7), noise(8));
+        let (fa, fb) = (
+            Frame::packed(&a, W, H, PixelFormat::Gray8).unwrap(),
+            Frame::packed(&b, W, H, PixelFormat::Gray8).unwrap(),
+        );
+        let e = Ellipse { cx: 60.0, cy: 45.0, hx: 16.0, hy: 12.0 };
+        let mut t = Template::new();
+        t.learn(&fa, &e);
+        let first = t.clone();
+        t.blend(&fb, &e, 0.0);
+        assert_eq!(t, first);
+        t.blend(&fb, &e, 1.0);
+        let mut want = Template::new();
+        want.learn(&fb, &e);
+        assert_eq!(t, want);
     }
 }

@@ -3,7 +3,8 @@
 //! validated by the core afterwards, so this only parses.
 
 use pftrack::{
-    Binning, Combination, Config, EdgeCue, Life, ModelUpdate, Resampling, Sampling, Shape, Sigma, Similarity, SizeSearch,
+    Binning, Combination, Config, EdgeCue, Life, ModelUpdate, Resampling, Sampling, Shape, Sigma, Similarity,
+    SizeSearch,
 };
 
 /// The keys `apply` understands, with what they set.
@@ -177,7 +178,9 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
             c.size = match v.split(':').collect::<Vec<_>>().as_slice() {
                 ["off"] => None,
                 [step, sim] => Some(SizeSearch { step: num(key, step)?, similarity: num(key, sim)?, aspect: true }),
-                [step, sim, "scale"] => Some(SizeSearch { step: num(key, step)?, similarity: num(key, sim)?, aspect: false }),
+                [step, sim, "scale"] => {
+                    Some(SizeSearch { step: num(key, step)?, similarity: num(key, sim)?, aspect: false })
+                }
                 _ => return Err(format!("{key}: `{v}`: expected off or STEP:SIMILARITY[:scale]")),
             }
         }
@@ -229,7 +232,13 @@ mod tests {
                 "edges" => "4:60",
                 "combination" => "weighted:0.3",
                 "adaptive_sigma" => "0.1:0.3",
+                "spread_sigma" => "4:0.01:0.3",
                 "lost_after" => "4",
+                "size" => "0.05:2",
+                "life" => "appearance",
+                "redetect" => "on",
+                "weighted_model" => "on",
+                "template" => "0.3:0.05",
                 _ => "0.07",
             };
             let mut c = Config::default();

@@ -76,7 +76,11 @@ fn tiny_and_huge_frames_track_without_trouble() {
     t.init(&f, BoundingBox::new(0.0, 0.0, 1.0, 1.0)).unwrap();
     for _ in 0..5 {
         let e = t.step(&f).unwrap();
-        assert!(e.confidence > 0.99, "the only pixel matches itself");
+        // The only pixel matches the first model (similarity 1); a box that
+        // fills the frame has no surroundings, so its contrast counts as a
+        // typical target's (0.39), and a one-pixel template has no layout
+        // (correlation 0): logistic(9.2·0.39 + 4.8 − 4.2) = 0.985.
+        assert!(e.confidence > 0.98, "the only pixel matches itself: {}", e.confidence);
         assert_eq!(e.state, TrackState::Tracking);
     }
     // 4096x4096, the largest accepted: a bright square on black.
