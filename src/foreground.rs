@@ -82,7 +82,7 @@ impl<const K: usize> Foreground<K> {
             self.learnt = true;
             let a = (crate::scalar::clamp(rate, 0.0, 1.0) * 65536.0) as u64;
             for (b, &c) in self.around.iter_mut().zip(counts.iter()) {
-                let new = (c as u64 * 65536 / total as u64).min(65535);
+                let new = (c as u64 * 65536).checked_div(total as u64).unwrap_or(0).min(65535);
                 *b = (((65536 - a) * *b as u64 + a * new + 32768) >> 16).min(65535) as u16;
             }
         }
@@ -93,7 +93,7 @@ impl<const K: usize> Foreground<K> {
     pub(crate) fn refresh(&mut self, model: &Model<K>) {
         for (u, (o, &b)) in self.odds.iter_mut().zip(self.around.iter()).enumerate() {
             let (q, b) = (model.whole_bin(u) + PRIOR, b as u32 + PRIOR);
-            *o = ((LEVELS * q + (q + b) / 2) / (q + b)) as u8;
+            *o = (LEVELS * q + (q + b) / 2).checked_div(q + b).unwrap_or(LEVELS / 2) as u8;
         }
     }
 }
@@ -138,11 +138,11 @@ fn pixel_box(x0: Real, y0: Real, x1: Real, y1: Real, w: i32, h: i32) -> (i32, i3
 /// The smallest lattice step that samples an area of `area` pixels with at
 /// most about `budget` samples.
 fn lattice_step(area: u32, budget: u32) -> i32 {
-    let mut step = 1i32;
-    while area / (step * step) as u32 > budget {
+    let mut step = 1u32;
+    while area.checked_div(step * step).is_some_and(|n| n > budget) {
         step += 1;
     }
-    step
+    step as i32
 }
 
 /// `P(target | colour)` over a rectangle of one frame, on a lattice, with
@@ -189,14 +189,18 @@ impl<const F: usize> ForegroundMap<F> {
         fg: &Foreground<K>,
     ) {
         let (w, h) = (frame.width() as i32, frame.height() as i32);
-        let (x0, y0) = (rect.0.clamp(0, w), rect.1.clamp(0, h));
-        let (x1, y1) = (rect.2.clamp(x0, w), rect.3.clamp(y0, h));
+        // `max` and `min` rather than `clamp`, which asserts its bounds are
+        // in order: a panic path.
+        let (x0, y0) = (rect.0.max(0).min(w), rect.1.max(0).min(h));
+        let (x1, y1) = (rect.2.max(x0).min(w), rect.3.max(y0).min(h));
+        // Cells along a side of length `n` at lattice step `s`.
+        let along = |n: i32, s: i32| (n + s - 1).checked_div(s).unwrap_or(0);
+        let cells = |s: i32| (along(x1 - x0, s) + 1) as usize * (along(y1 - y0, s) + 1) as usize;
         let mut step = 1;
-        let cells = |s: i32| ((x1 - x0 + s - 1) / s + 1) as usize * ((y1 - y0 + s - 1) / s + 1) as usize;
         while cells(step) > F && step < w.max(h) {
             step += 1;
         }
-        let (cols, rows) = ((x1 - x0 + step - 1) / step, (y1 - y0 + step - 1) / step);
+        let (cols, rows) = (along(x1 - x0, step), along(y1 - y0, step));
         (self.x0, self.y0, self.step) = (x0, y0, step);
         if cells(step) > F {
             (self.cols, self.rows) = (0, 0);

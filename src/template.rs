@@ -94,29 +94,36 @@ impl Template {
     }
 }
 
+/// Most pixels read per cell and side: a cell of a large box is read on a
+/// sub-grid of at most this many by this many pixels, so that a sample costs
+/// at most 16 reads whatever the box's size.
+const PER_CELL: i32 = 4;
+
 /// Reads the box of `e` on the template grid: each sample is the mean luma
 /// of its cell of the box (so the correlation falls off smoothly, over
-/// about a cell, as a candidate moves off the target).
+/// about a cell, as a candidate moves off the target), read on a sub-grid
+/// of at most [`PER_CELL`]² pixels. Pixels off the frame repeat its edge.
 fn sample(frame: &Frame<'_>, e: &Ellipse) -> Patch {
     let mut p = Patch { samples: [0; SAMPLES], sum: 0, sum2: 0 };
     let (w, h) = (frame.width() as i32, frame.height() as i32);
     let (cw, ch) = (2.0 * e.hx / GRID as Real, 2.0 * e.hy / GRID as Real);
+    // Sub-grid offsets within a cell, in pixels (at least one pixel apart).
+    let (nx, ny) = (cw.max(1.0).min(PER_CELL as Real) as i32, ch.max(1.0).min(PER_CELL as Real) as i32);
+    let (sx, sy) = (cw / nx as Real, ch / ny as Real);
     let (bx, by) = (e.cx - e.hx, e.cy - e.hy);
+    let n = (nx * ny) as u32;
     for j in 0..GRID {
-        let ya = crate::region::floor(by + j as Real * ch);
-        let yb = crate::region::floor(by + (j + 1) as Real * ch).max(ya + 1);
         for i in 0..GRID {
-            let xa = crate::region::floor(bx + i as Real * cw);
-            let xb = crate::region::floor(bx + (i + 1) as Real * cw).max(xa + 1);
-            let (mut s, mut n) = (0u32, 0u32);
-            for y in ya..yb {
-                for x in xa..xb {
-                    let (x, y) = (x.clamp(0, w - 1) as usize, y.clamp(0, h - 1) as usize);
-                    s += frame.rgb(x, y).map_or(0, |c| luma(c) as u32);
-                    n += 1;
+            let (x0, y0) = (bx + i as Real * cw + 0.5 * sx, by + j as Real * ch + 0.5 * sy);
+            let mut sum = 0u32;
+            for v in 0..ny {
+                let y = crate::region::floor(y0 + v as Real * sy).max(0).min(h - 1);
+                for u in 0..nx {
+                    let x = crate::region::floor(x0 + u as Real * sx).max(0).min(w - 1);
+                    sum += frame.rgb(x as usize, y as usize).map_or(0, |c| luma(c) as u32);
                 }
             }
-            let v = (s + n / 2) / n.max(1);
+            let v = (sum + n / 2).checked_div(n).unwrap_or(0);
             if let Some(t) = p.samples.get_mut(j * GRID + i) {
                 *t = v as u8;
             }
