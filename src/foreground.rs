@@ -107,22 +107,20 @@ fn ring_histogram<const K: usize>(frame: &Frame<'_>, e: &Ellipse, layout: &Layou
     let inner = pixel_box(e.cx - e.hx, e.cy - e.hy, e.cx + e.hx, e.cy + e.hy, w, h);
     let outer = pixel_box(e.cx - 2.0 * e.hx, e.cy - 2.0 * e.hy, e.cx + 2.0 * e.hx, e.cy + 2.0 * e.hy, w, h);
     let area = ((outer.2 - outer.0) as u32).saturating_mul((outer.3 - outer.1) as u32);
-    let step = lattice_step(area, 2000);
+    let step = lattice_step(area, 500);
     let mut n = 0u32;
     let mut y = outer.1;
+    let cols = crate::region::div_small((outer.2 - outer.0 + step - 1) as u32, step as u32) as usize;
     while y < outer.3 {
-        let mut x = outer.0;
-        while x < outer.2 {
-            let inside = x >= inner.0 && x < inner.2 && y >= inner.1 && y < inner.3;
-            if !inside
-                && let Some(rgb) = frame.rgb(x as usize, y as usize)
-                && let Some(c) = counts.get_mut(layout.bin(rgb))
-            {
+        let inside_row = y >= inner.1 && y < inner.3;
+        crate::histogram::row_bins(frame, layout, y as usize, (outer.0 as usize, step as usize, cols), |i, bin| {
+            let x = outer.0 + i as i32 * step;
+            let inside = inside_row && x >= inner.0 && x < inner.2;
+            if !inside && let Some(c) = counts.get_mut(bin) {
                 *c += 1;
                 n += 1;
             }
-            x += step;
-        }
+        });
         y += step;
     }
     n
@@ -211,22 +209,24 @@ impl<const F: usize> ForegroundMap<F> {
         for s in self.sums.iter_mut().take(stride) {
             *s = 0;
         }
+        let odds = &fg.odds;
         for j in 0..rows {
-            let y = (y0 + j * step) as usize;
-            let mut run = 0u16;
             let base = (j as usize + 1) * stride;
             if let Some(s) = self.sums.get_mut(base) {
                 *s = 0;
             }
-            for i in 0..cols {
-                let x = (x0 + i * step) as usize;
-                let p = frame.rgb(x, y).and_then(|rgb| fg.odds.get(layout.bin(rgb))).copied().unwrap_or(0);
-                run = run.wrapping_add(p as u16);
-                let above = self.sums.get(base - stride + i as usize + 1).copied().unwrap_or(0);
-                if let Some(s) = self.sums.get_mut(base + i as usize + 1) {
-                    *s = above.wrapping_add(run);
+            // Row j's running sums: the row above's plus this row's so far.
+            let Some((above, here)) = self.sums.split_at_mut_checked(base) else { break };
+            let above = above.get(base - stride + 1..).unwrap_or(&[]);
+            let here = here.get_mut(1..).unwrap_or(&mut []);
+            let mut run = 0u16;
+            let span = (x0 as usize, step as usize, cols as usize);
+            crate::histogram::row_bins(frame, layout, (y0 + j * step) as usize, span, |i, bin| {
+                run = run.wrapping_add(odds.get(bin).copied().unwrap_or(0) as u16);
+                if let (Some(s), Some(&a)) = (here.get_mut(i), above.get(i)) {
+                    *s = a.wrapping_add(run);
                 }
-            }
+            });
         }
     }
 

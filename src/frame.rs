@@ -186,6 +186,20 @@ impl<'a> Frame<'a> {
     }
 }
 
+impl Frame<'_> {
+    /// The 8-bit luma (BT.601) of pixel `(x, y)`, or `None` outside the
+    /// frame: read directly in GRAY8 and YUV, from tables in RGB565.
+    pub fn luma(&self, x: usize, y: usize) -> Option<u8> {
+        let row = self.row(y)?;
+        match self.format {
+            PixelFormat::Rgb565 => Rgb565::luma(row, x),
+            PixelFormat::Rgb888 => Rgb888::luma(row, x),
+            PixelFormat::Yuv422 => Yuv422::luma(row, x),
+            PixelFormat::Gray8 => Gray8::luma(row, x),
+        }
+    }
+}
+
 /// Reads one pixel of a row in a given format. Implemented by zero-sized
 /// format markers so that the histogram loop is compiled once per format,
 /// with no per-pixel format dispatch.

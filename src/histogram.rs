@@ -566,6 +566,54 @@ fn indexed_row<P: PixelRead, const K: usize>(
     total
 }
 
+/// Calls `visit(i, bin)` for the pixels `(x0 + i·step, y)`, `i < n`, that
+/// lie in the frame, with their colour bin under `layout` (its first
+/// segment's). For the default layout each pixel format has its own loop
+/// (RGB565 bins come straight from the packed bits); the others share the
+/// general accessor.
+pub(crate) fn row_bins<F: FnMut(usize, usize)>(
+    frame: &Frame<'_>,
+    layout: &Layout,
+    y: usize,
+    (x0, step, n): (usize, usize, usize),
+    visit: F,
+) {
+    let Some(row) = frame.row(y) else { return };
+    let step = step.max(1);
+    if !layout.is_fast() {
+        return general_bins(frame, layout, y, (x0, step, n), visit);
+    }
+    match frame.format() {
+        PixelFormat::Rgb565 => packed_bins::<Rgb565, F>(row, (x0, step, n), visit),
+        PixelFormat::Rgb888 => packed_bins::<Rgb888, F>(row, (x0, step, n), visit),
+        PixelFormat::Gray8 => packed_bins::<Gray8, F>(row, (x0, step, n), visit),
+        PixelFormat::Yuv422 => general_bins(frame, layout, y, (x0, step, n), visit),
+    }
+}
+
+#[inline(always)]
+fn packed_bins<P: PixelRead, F: FnMut(usize, usize)>(row: &[u8], (x0, step, n): (usize, usize, usize), mut visit: F) {
+    let Some(px) = P::pixels(row) else { return };
+    for (i, &p) in px.iter().skip(x0).step_by(step).take(n).enumerate() {
+        visit(i, P::px_8x8x8(p));
+    }
+}
+
+fn general_bins<F: FnMut(usize, usize)>(
+    frame: &Frame<'_>,
+    layout: &Layout,
+    y: usize,
+    (x0, step, n): (usize, usize, usize),
+    mut visit: F,
+) {
+    for i in 0..n {
+        match frame.rgb(x0 + i * step, y) {
+            Some(rgb) => visit(i, layout.bin(rgb)),
+            None => return,
+        }
+    }
+}
+
 /// Calls `visit(x, y, bin)` for every sample of ellipse `e` on `lattice`:
 /// the region walk of [`Histogram::compute_on`], for algorithms that need
 /// each pixel's bin and place (mean shift).

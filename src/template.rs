@@ -10,7 +10,7 @@
 //! in `[-1, 1]`: insensitive to brightness and contrast changes, high only
 //! when the layout of light and dark matches.
 
-use crate::frame::{Frame, luma};
+use crate::frame::Frame;
 use crate::geometry::Ellipse;
 use crate::scalar::{Real, sqrt};
 
@@ -120,7 +120,7 @@ fn sample(frame: &Frame<'_>, e: &Ellipse) -> Patch {
                 let y = crate::region::floor(y0 + v as Real * sy).max(0).min(h - 1);
                 for u in 0..nx {
                     let x = crate::region::floor(x0 + u as Real * sx).max(0).min(w - 1);
-                    sum += frame.rgb(x as usize, y as usize).map_or(0, |c| luma(c) as u32);
+                    sum += frame.luma(x as usize, y as usize).map_or(0, |v| v as u32);
                 }
             }
             let v = (sum + n / 2).checked_div(n).unwrap_or(0);
