@@ -24,7 +24,7 @@
 
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
-use crate::histogram::{Layout, Model};
+use crate::histogram::{Histogram, Layout, Model};
 use crate::scalar::Real;
 
 /// Probability levels of a map cell: `P(target | colour)` in sixteenths,
@@ -71,19 +71,29 @@ impl<const K: usize> Foreground<K> {
     }
 
     /// Learns the surroundings of box `e` in `frame` (replacing them when
-    /// `rate` is 1, blending `b ← (1 − rate) b + rate · b_new` otherwise) and
-    /// refreshes the odds against `model`.
-    pub(crate) fn learn(&mut self, frame: &Frame<'_>, e: &Ellipse, layout: &Layout, model: &Model<K>, rate: Real) {
-        let mut counts = [0u32; K];
-        let total = ring_histogram(frame, e, layout, &mut counts);
+    /// `rate` is 1, blending `b ← (1 − rate) b + rate · b_new` otherwise,
+    /// with the rate in 1/256ths) and refreshes the odds against `model`.
+    /// `scratch` is working memory for the new histogram (on the stack it
+    /// would cost 4·K bytes there).
+    pub(crate) fn learn(
+        &mut self,
+        frame: &Frame<'_>,
+        e: &Ellipse,
+        (layout, model): (&Layout, &Model<K>),
+        rate: Real,
+        scratch: &mut Histogram<K>,
+    ) {
+        ring_histogram(frame, e, layout, scratch);
+        let total = scratch.total();
         if total > 0 {
             // The first surroundings replace the even odds outright.
             let rate = if self.learnt { rate } else { 1.0 };
             self.learnt = true;
-            let a = (crate::scalar::clamp(rate, 0.0, 1.0) * 65536.0) as u64;
-            for (b, &c) in self.around.iter_mut().zip(counts.iter()) {
-                let new = (c as u64 * 65536).checked_div(total as u64).unwrap_or(0).min(65535);
-                *b = (((65536 - a) * *b as u64 + a * new + 32768) >> 16).min(65535) as u16;
+            let a = (crate::scalar::clamp(rate, 0.0, 1.0) * 256.0) as u32;
+            for (b, &c) in self.around.iter_mut().zip(scratch.counts().iter()) {
+                // c <= total, at most a few thousand samples: c · 2^16 fits a u32.
+                let new = (c << 16).checked_div(total).unwrap_or(0).min(65535);
+                *b = (((256 - a) * *b as u32 + a * new + 128) >> 8).min(65535) as u16;
             }
         }
         self.refresh(model);
@@ -98,32 +108,29 @@ impl<const K: usize> Foreground<K> {
     }
 }
 
-/// The flat-weighted colour histogram of the ring between box `e` and the
-/// box twice its width and height around it (three target areas), clipped
-/// to the frame, on a lattice of at most about 2000 samples. Returns the
-/// number of samples.
-fn ring_histogram<const K: usize>(frame: &Frame<'_>, e: &Ellipse, layout: &Layout, counts: &mut [u32; K]) -> u32 {
+/// Replaces `hist` with the flat-weighted colour histogram of the ring
+/// between box `e` and the box twice its width and height around it (three
+/// target areas), clipped to the frame, on a lattice of at most about 500
+/// samples.
+fn ring_histogram<const K: usize>(frame: &Frame<'_>, e: &Ellipse, layout: &Layout, hist: &mut Histogram<K>) {
+    hist.clear();
     let (w, h) = (frame.width() as i32, frame.height() as i32);
     let inner = pixel_box(e.cx - e.hx, e.cy - e.hy, e.cx + e.hx, e.cy + e.hy, w, h);
     let outer = pixel_box(e.cx - 2.0 * e.hx, e.cy - 2.0 * e.hy, e.cx + 2.0 * e.hx, e.cy + 2.0 * e.hy, w, h);
     let area = ((outer.2 - outer.0) as u32).saturating_mul((outer.3 - outer.1) as u32);
     let step = lattice_step(area, 500);
-    let mut n = 0u32;
-    let mut y = outer.1;
     let cols = crate::region::div_small((outer.2 - outer.0 + step - 1) as u32, step as u32) as usize;
+    let mut y = outer.1;
     while y < outer.3 {
         let inside_row = y >= inner.1 && y < inner.3;
         crate::histogram::row_bins(frame, layout, y as usize, (outer.0 as usize, step as usize, cols), |i, bin| {
             let x = outer.0 + i as i32 * step;
-            let inside = inside_row && x >= inner.0 && x < inner.2;
-            if !inside && let Some(c) = counts.get_mut(bin) {
-                *c += 1;
-                n += 1;
+            if !(inside_row && x >= inner.0 && x < inner.2) {
+                hist.add(bin, 1);
             }
         });
         y += step;
     }
-    n
 }
 
 /// The pixel rectangle `[x0, x1) × [y0, y1)` covering a real box, clipped to
@@ -299,7 +306,6 @@ mod tests {
     use super::*;
     use crate::colour::Binning;
     use crate::frame::PixelFormat;
-    use crate::histogram::Histogram;
     use crate::region::Lattice;
 
     const W: usize = 120;
@@ -323,7 +329,7 @@ mod tests {
         hist.compute_on(f, e, Binning::Rgb8x8x8, Lattice::FULL);
         let model = Model::from_histogram(&hist).unwrap();
         let mut fg = Foreground::<512>::new();
-        fg.learn(f, e, &Layout::whole(Binning::Rgb8x8x8), &model, 0.25);
+        fg.learn(f, e, (&Layout::whole(Binning::Rgb8x8x8), &model), 0.25, &mut hist);
         fg
     }
 

@@ -190,7 +190,12 @@ impl Frame<'_> {
     /// The 8-bit luma (BT.601) of pixel `(x, y)`, or `None` outside the
     /// frame: read directly in GRAY8 and YUV, from tables in RGB565.
     pub fn luma(&self, x: usize, y: usize) -> Option<u8> {
-        let row = self.row(y)?;
+        self.luma_in(self.row(y)?, x)
+    }
+
+    /// The luma of pixel `x` of `row`, a row of this frame (from [`Frame::row`]).
+    #[inline]
+    pub(crate) fn luma_in(&self, row: &[u8], x: usize) -> Option<u8> {
         match self.format {
             PixelFormat::Rgb565 => Rgb565::luma(row, x),
             PixelFormat::Rgb888 => Rgb888::luma(row, x),

@@ -849,6 +849,14 @@ impl<const K: usize> Model<K> {
         self.support = Support::of(&self.sqrt_q);
     }
 
+    /// Makes this model a copy of `other`, in place.
+    pub(crate) fn copy_from(&mut self, other: &Self) {
+        self.q.copy_from_slice(&other.q);
+        self.sqrt_q.copy_from_slice(&other.sqrt_q);
+        self.support.words.copy_from_slice(&other.support.words);
+        self.segments = other.segments;
+    }
+
     fn refresh_roots(&mut self) {
         for (s, &q) in self.sqrt_q.iter_mut().zip(self.q.iter()) {
             // sqrt(q · 2^16 · 2^8) = sqrt(q_real) · 2^12

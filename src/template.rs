@@ -107,23 +107,34 @@ fn sample(frame: &Frame<'_>, e: &Ellipse) -> Patch {
     let mut p = Patch { samples: [0; SAMPLES], sum: 0, sum2: 0 };
     let (w, h) = (frame.width() as i32, frame.height() as i32);
     let (cw, ch) = (2.0 * e.hx / GRID as Real, 2.0 * e.hy / GRID as Real);
-    // Sub-grid offsets within a cell, in pixels (at least one pixel apart).
-    let (nx, ny) = (cw.max(1.0).min(PER_CELL as Real) as i32, ch.max(1.0).min(PER_CELL as Real) as i32);
-    let (sx, sy) = (cw / nx as Real, ch / ny as Real);
-    let (bx, by) = (e.cx - e.hx, e.cy - e.hy);
-    let n = (nx * ny) as u32;
-    for j in 0..GRID {
-        for i in 0..GRID {
-            let (x0, y0) = (bx + i as Real * cw + 0.5 * sx, by + j as Real * ch + 0.5 * sy);
-            let mut sum = 0u32;
-            for v in 0..ny {
-                let y = crate::region::floor(y0 + v as Real * sy).max(0).min(h - 1);
-                for u in 0..nx {
-                    let x = crate::region::floor(x0 + u as Real * sx).max(0).min(w - 1);
-                    sum += frame.luma(x as usize, y as usize).map_or(0, |v| v as u32);
-                }
+    // Sub-grid points per cell and side (pixels at least one apart).
+    let (nx, ny) = (cw.max(1.0).min(PER_CELL as Real) as usize, ch.max(1.0).min(PER_CELL as Real) as usize);
+    // The columns and rows read, GRID cells of nx (ny) each, worked out
+    // once; off the frame they repeat its edge.
+    let mut xs = [0usize; GRID * PER_CELL as usize];
+    let mut ys = [0usize; GRID * PER_CELL as usize];
+    for (coords, n, size, start, limit) in
+        [(&mut xs, nx, cw, e.cx - e.hx, w), (&mut ys, ny, ch, e.cy - e.hy, h)]
+    {
+        let sub = size / n as Real;
+        for (k, c) in coords.iter_mut().take(GRID * n).enumerate() {
+            let (cell, j) = (k / n.max(1), k % n.max(1));
+            let v = start + cell as Real * size + (j as Real + 0.5) * sub;
+            *c = crate::region::floor(v).max(0).min(limit - 1) as usize;
+        }
+    }
+    let per = (nx * ny) as u32;
+    let mut cells = [0u32; GRID];
+    for (j, rows) in ys.chunks(ny.max(1)).take(GRID).enumerate() {
+        cells.iter_mut().for_each(|c| *c = 0);
+        for &y in rows {
+            let Some(row) = frame.row(y) else { continue };
+            for (c, cols) in cells.iter_mut().zip(xs.chunks(nx.max(1))) {
+                *c += cols.iter().map(|&x| frame.luma_in(row, x).map_or(0, |v| v as u32)).sum::<u32>();
             }
-            let v = (sum + n / 2).checked_div(n).unwrap_or(0);
+        }
+        for (i, &c) in cells.iter().enumerate() {
+            let v = (c + per / 2).checked_div(per).unwrap_or(0);
             if let Some(t) = p.samples.get_mut(j * GRID + i) {
                 *t = v as u8;
             }

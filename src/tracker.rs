@@ -183,8 +183,9 @@ struct Models<const K: usize> {
     fg: Foreground<K>,
     /// The grey-level template.
     template: crate::template::Template,
-    /// The colour model as first learnt, which never adapts.
-    anchor: Option<Model<K>>,
+    /// The colour model as first learnt, which never adapts (learnt for
+    /// [`Life::Confidence`] only).
+    anchor: Model<K>,
 }
 
 impl<const K: usize> Models<K> {
@@ -308,12 +309,11 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
             None => rho,
         };
         // Only exact histograms can be compared with a second model.
-        let anchored = match &models.anchor {
-            Some(a) if keep => {
-                let per = a.compare(&self.colour, cfg.similarity);
-                if cfg!(feature = "quadrants") && cfg.quadrants { median4(per) } else { per[0] }
-            }
-            _ => rho,
+        let anchored = if keep && cfg.life != Life::Appearance {
+            let per = models.anchor.compare(&self.colour, cfg.similarity);
+            if cfg!(feature = "quadrants") && cfg.quadrants { median4(per) } else { per[0] }
+        } else {
+            rho
         };
         Seen { rho, sim, quads, anchored }
     }
@@ -607,7 +607,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
                 edge,
                 fg: Foreground::new(),
                 template: crate::template::Template::new(),
-                anchor: None,
+                anchor: Model::zero(),
             },
             frame: (fw, fh),
             threshold: 0.0,
@@ -618,13 +618,14 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         m.colour.learn(&sc.colour, segments);
         let aware = cfg.life != Life::Appearance;
         if aware {
-            m.anchor = Some(m.colour.clone());
+            // In place: a clone would pass 4·K bytes through the stack.
+            m.anchor.copy_from(&m.colour);
         }
         if aware || cfg.template.is_some() {
             m.template.learn(frame, &e);
         }
         if cfg.uses_surroundings() {
-            m.fg.learn(frame, &e, &m.layout, &m.colour, 1.0);
+            m.fg.learn(frame, &e, (&m.layout, &m.colour), 1.0, &mut sc.colour);
             if cfg.weighted_model {
                 m.colour.reweight(m.fg.odds());
             }
@@ -963,7 +964,8 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
                 m.template.blend(frame, &look.ellipse, t.rate);
             }
             if cfg.uses_surroundings() {
-                m.fg.learn(frame, &look.ellipse, &m.layout, &m.colour, cfg.surroundings_rate);
+                // The estimate's histogram is blended in: its memory is free.
+                m.fg.learn(frame, &look.ellipse, (&m.layout, &m.colour), cfg.surroundings_rate, &mut scratch.colour);
                 if cfg.weighted_model {
                     m.colour.reweight(m.fg.odds());
                 }
