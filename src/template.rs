@@ -113,9 +113,7 @@ fn sample(frame: &Frame<'_>, e: &Ellipse) -> Patch {
     // once; off the frame they repeat its edge.
     let mut xs = [0usize; GRID * PER_CELL as usize];
     let mut ys = [0usize; GRID * PER_CELL as usize];
-    for (coords, n, size, start, limit) in
-        [(&mut xs, nx, cw, e.cx - e.hx, w), (&mut ys, ny, ch, e.cy - e.hy, h)]
-    {
+    for (coords, n, size, start, limit) in [(&mut xs, nx, cw, e.cx - e.hx, w), (&mut ys, ny, ch, e.cy - e.hy, h)] {
         let sub = size / n as Real;
         for (k, c) in coords.iter_mut().take(GRID * n).enumerate() {
             let (cell, j) = (k / n.max(1), k % n.max(1));
