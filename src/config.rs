@@ -155,7 +155,8 @@ pub struct TemplateCue {
 }
 
 /// How the estimate's size and shape are searched each frame. The filter's
-/// mean box, and the boxes one step wider, narrower, taller and shorter, are
+/// mean box, and the boxes one step wider, narrower, taller, shorter, wider
+/// and shorter, and narrower and taller, are
 /// scored by their contrast with the ring around them in the map of
 /// `P(target | colour)` (see [`crate::foreground`]) plus `similarity` times
 /// their similarity with the models; the best becomes the estimate, and the

@@ -1072,10 +1072,12 @@ fn search_size<const K: usize, const E: usize>(
 ) -> (Real, Real) {
     let up = 1.0 + search.step;
     let dn = 1.0 / up;
-    // The mean first, so that a tie keeps it; then one step along each axis
-    // (or in scale only).
+    // The mean first, so that a tie keeps it; then one step along each
+    // axis, and the two turns (wider and shorter, narrower and taller) so
+    // that the aspect can follow a turning target at twice the rate; or
+    // one step in scale only.
     let candidates: &[(Real, Real)] = if search.aspect {
-        &[(1.0, 1.0), (up, 1.0), (dn, 1.0), (1.0, up), (1.0, dn)]
+        &[(1.0, 1.0), (up, 1.0), (dn, 1.0), (1.0, up), (1.0, dn), (up, dn), (dn, up)]
     } else {
         &[(1.0, 1.0), (up, up), (dn, dn)]
     };

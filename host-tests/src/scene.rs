@@ -33,6 +33,14 @@ pub enum Story {
     ExitReturn,
     /// Smooth motion in GRAY8: only brightness to go on.
     GraySmooth,
+    /// The target shrinks to half its width and height while it drifts.
+    Shrink,
+    /// The target turns from tall to wide: its aspect ratio (width over
+    /// height) doubles, from 0.7 to 1.4, at a constant area.
+    Turn,
+    /// The target leaves through the right edge and comes back in through
+    /// the left one, on the other side of the frame.
+    CrossOver,
     /// The speed audit's scene: a round target of 1/8 of the frame width
     /// (40x40 px in QVGA) on a smooth path, at any resolution.
     Audit,
@@ -68,6 +76,9 @@ pub fn catalogue() -> Vec<SceneSpec> {
         s("distractor", Story::Distractor, PixelFormat::Rgb888, 44, 4),
         s("exit_return", Story::ExitReturn, PixelFormat::Rgb565, 48, 5),
         s("gray_smooth", Story::GraySmooth, PixelFormat::Gray8, 30, 6),
+        s("shrink", Story::Shrink, PixelFormat::Rgb565, 40, 8),
+        s("turn", Story::Turn, PixelFormat::Yuv422, 40, 9),
+        s("cross_over", Story::CrossOver, PixelFormat::Rgb565, 50, 10),
     ]
 }
 
@@ -159,6 +170,29 @@ fn layout(story: Story, t: usize, n: usize, (w, h): (usize, usize)) -> Layout {
                 b: w / 16.0,
                 ..base
             }
+        }
+        Story::Shrink => {
+            // Linear in time from full to half size, drifting right and up.
+            let s = 1.0 - 0.5 * tf / (n as f64 - 1.0).max(1.0);
+            Layout { cx: 50.0 + 0.8 * tf, cy: 52.0 - 0.3 * tf, a: 20.0 * s, b: 24.0 * s, ..base }
+        }
+        Story::Turn => {
+            // Aspect a/b from 0.7 to 1.4 geometrically, area a·b constant.
+            let r = 0.7 * 2f64.powf(tf / (n as f64 - 1.0).max(1.0));
+            let area = 16.0 * 16.0;
+            Layout { cx: 60.0 + 10.0 * (tf / 10.0).sin(), cy: 48.0, a: (area * r).sqrt(), b: (area / r).sqrt(), ..base }
+        }
+        Story::CrossOver => {
+            let cx = if t < 16 {
+                70.0 + 4.5 * tf
+            } else if t < 26 {
+                // Out of sight: well past the right edge.
+                200.0
+            } else {
+                // In from the left edge, moving right.
+                -12.0 + 3.0 * (tf - 26.0)
+            };
+            Layout { cx, cy: 44.0 + 6.0 * (tf * 0.3).sin(), ..base }
         }
         Story::ExitReturn => {
             let cx = if t < 16 {
