@@ -357,12 +357,13 @@ fn edge_cue_tells_the_target_from_a_same_coloured_decoy() {
     assert!(rho_colour > 0.85, "colour ρ(target, decoy) = {rho_colour}");
     assert!(rho_edge < rho_colour - 0.2, "edge ρ(target, decoy) = {rho_edge}, colour {rho_colour}");
 
-    // So after they cross, colour alone follows the decoy on some seeds,
+    // So after they cross, colour alone follows the decoy on some seeds
+    // (measured: 8 of 16),
     // while colour + edges stays on the target on every seed, on every
     // frame where the target is mostly visible (the crossing included).
     let colour_only = Config { edges: None, ..Config::default() };
     let mut decoy_followed = 0;
-    for seed in 1..=8u64 {
+    for seed in 1..=16u64 {
         let (with_edges, _) = run(&fx, seed);
         for i in (1..=last).filter(|&i| fx.frames[i].visible_permille >= 500) {
             assert!(on_target(&with_edges[i - 1], &fx.frames[i].truth), "seed {seed}: off the target at frame {i}");
@@ -378,5 +379,5 @@ fn edge_cue_tells_the_target_from_a_same_coloured_decoy() {
             decoy_followed += 1;
         }
     }
-    assert!(decoy_followed >= 2, "colour alone followed the decoy on {decoy_followed} of 8 seeds");
+    assert!(decoy_followed >= 4, "colour alone followed the decoy on {decoy_followed} of 16 seeds");
 }
