@@ -283,7 +283,7 @@ impl Default for Config {
             lost_after: 3,
             reseed_fraction: 0.25,
             min_half_axis: 2.0,
-            life: Life::Confidence { lost_below: 0.8, found_above: 0.85 },
+            life: Life::Confidence { lost_below: 0.5, found_above: 0.6 },
             redetect: false,
             size: Some(SizeSearch { step: 0.02, similarity: 1.0, aspect: true }),
             surroundings_rate: 0.05,

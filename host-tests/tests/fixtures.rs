@@ -171,7 +171,9 @@ fn finds_a_target_that_comes_back_on_the_other_side() {
             (1..back).any(|i| est[i - 1].event == Some(Event::LostTarget)),
             "seed {seed}: never declared lost while the target was away"
         );
-        for i in (gone + Config::default().lost_after as usize + 1..back).filter(|&i| fx.frames[i].visible_permille == 0) {
+        for i in
+            (gone + Config::default().lost_after as usize + 1..back).filter(|&i| fx.frames[i].visible_permille == 0)
+        {
             assert_ne!(est[i - 1].state, TrackState::Tracking, "seed {seed}: claims tracking at frame {i}");
         }
         let found = (back - 2..fx.frames.len())

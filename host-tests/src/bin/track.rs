@@ -81,12 +81,18 @@ enum Command {
         /// OTB sequence folders (only groundtruth.txt is read).
         #[arg(long, required = true, num_args = 1..)]
         truth: Vec<PathBuf>,
-        /// Result folders, as NAME=FOLDER or FOLDER (named after the folder).
+        /// Result folders, as NAME=FOLDER or FOLDER (named after the
+        /// folder); NAME=F1,F2,… scores several runs (e.g. seeds) as one,
+        /// averaging each sequence's scores over them.
         #[arg(long, required = true, num_args = 1..)]
         results: Vec<String>,
         /// Where to write success.png and precision.png.
         #[arg(long, default_value = "out")]
         plots: PathBuf,
+        /// A tune / check division of the sequences: the table then has a
+        /// mean AUC column for each split besides the overall one.
+        #[arg(long)]
+        split: Option<PathBuf>,
     },
     /// Runs each configuration variant of the ablation study over the
     /// sequences for several seeds and prints one markdown table of mean
@@ -131,37 +137,45 @@ const VARIANTS: &[(&str, &[&str])] = &[
             "velocity_noise=0.05",
             "velocity_decay=1",
             "update_sigma=0.2",
+            "life=appearance",
+            "size=off",
         ],
     ),
+    ("life: the appearance test (paper 1)", &["life=appearance"]),
+    ("life: confidence, lost below 0.7, found above 0.8", &["life=confidence:0.7:0.8"]),
+    ("life: confidence, lost below 0.8, found above 0.85", &["life=confidence:0.8:0.85"]),
+    ("life: + re-detection while lost", &["redetect=on"]),
+    ("size: not searched (random walk only)", &["size=off"]),
+    ("size: searched by contrast only", &["size=0.02:0"]),
+    ("size: scale only (aspect kept)", &["size=0.02:1:scale"]),
+    ("size: step 0.05", &["size=0.05:1"]),
+    ("surroundings: adapt at 0.02", &["surroundings_rate=0.02"]),
+    ("colour: background-weighted model (CBWH)", &["weighted_model=on"]),
+    ("cues: + grey template, share 0.3", &["template=0.3:0.05"]),
+    ("likelihood: adaptive σ, floor 0.02", &["adaptive_sigma=0.02:0.5"]),
+    ("likelihood: σ from spread, 4 e-folds", &["spread_sigma=4:0.005:0.5"]),
+    ("likelihood: fixed σ 0.2, no ε", &["sigma=0.2", "eps=0"]),
+    ("sampling: 1000 samples per region", &["max_samples=1000"]),
     ("sampling: all pixels", &["sampling=full"]),
     ("sampling: quarter", &["sampling=quarter"]),
-    ("sampling: all pixels, no budget", &["sampling=full", "max_samples=0"]),
     ("sampling: checkerboard, no budget", &["max_samples=0"]),
-    ("sampling: quarter, no budget", &["sampling=quarter", "max_samples=0"]),
     ("cues: colour only", &["edges=off"]),
     ("cues: edges threshold 50", &["edges=8:50"]),
     ("cues: edges with a flat bin", &["edges=8:100:flat"]),
     ("cues: weighted 0.5 instead of product", &["combination=weighted:0.5"]),
-    ("likelihood: fixed σ 0.2, no ε", &["sigma=0.2", "eps=0"]),
-    ("likelihood: adaptive σ, no ε", &["eps=0"]),
     ("colour: HSV 8x8x4", &["binning=hsv8x8x4"]),
-    ("dynamics: constant velocity, paper noise", &["velocity_decay=1", "velocity_noise=0.05", "position_noise=0.1"]),
-    ("model: update gate σ 0.2 (paper 1)", &["update_sigma=0.2"]),
-    ("model: never updated", &["alpha=0"]),
-    ("resampling: multinomial", &["resampling=multinomial"]),
     ("colour: RGB 4x4x4", &["binning=rgb4x4x4"]),
     ("colour: adaptive bins (Birgé–Rozenholc)", &["binning=adaptive"]),
     ("spatial: quadrants, RGB 4x4x4", &["quadrants=on", "binning=rgb4x4x4"]),
-    ("spatial: quadrants, adaptive bins", &["quadrants=on", "binning=adaptive"]),
-    ("similarity: histogram intersection", &["similarity=intersection"]),
-    ("likelihood table, spacing 1 (fixed size)", &["table=1"]),
-    ("likelihood table, spacing 2 (fixed size)", &["table=2"]),
-    ("per-particle, fixed size (table's reference)", &["scale_noise=0"]),
-    ("cues: + ellipse-boundary gradient, share 0.1", &["boundary=0.1"]),
-    ("cues: + ellipse-boundary gradient, share 0.3", &["boundary=0.3"]),
-    ("cues: + ellipse-boundary gradient, share 0.5 (paper's sum)", &["boundary=0.5"]),
-    ("likelihood: exponential exp(-d/σ)", &["shape=exponential"]),
+    ("dynamics: constant velocity, paper noise", &["velocity_decay=1", "velocity_noise=0.05", "position_noise=0.1"]),
+    ("model: update gate σ 0.2 (paper 1)", &["update_sigma=0.2"]),
+    ("model: never updated", &["alpha=0"]),
     ("model: update only when degraded (T = 0.9 ρ₀, 10 frames)", &["model_update=degraded:0.9:10"]),
+    ("resampling: multinomial", &["resampling=multinomial"]),
+    ("similarity: histogram intersection", &["similarity=intersection"]),
+    ("likelihood: exponential exp(-d/σ)", &["shape=exponential"]),
+    ("likelihood table, spacing 2 (fixed size)", &["table=2"]),
+    ("cues: + ellipse-boundary gradient, share 0.3", &["boundary=0.3"]),
 ];
 
 /// Variants that swap the particle filter for another tracker.
@@ -445,7 +459,7 @@ fn read_boxes(path: &Path) -> Result<Vec<BoundingBox>, String> {
     otb::parse_groundtruth(&text).map_err(|e| format!("{}: {e}", path.display()))
 }
 
-fn score_command(truth: &[PathBuf], results: &[String], plots: &Path) -> Result<(), String> {
+fn score_command(truth: &[PathBuf], results: &[String], plots: &Path, split: Option<&Split>) -> Result<(), String> {
     let truths: Vec<(String, Vec<BoundingBox>)> = truth
         .iter()
         .map(|dir| {
@@ -453,44 +467,73 @@ fn score_command(truth: &[PathBuf], results: &[String], plots: &Path) -> Result<
             read_boxes(&dir.join("groundtruth.txt")).map(|t| (name, t))
         })
         .collect::<Result<_, _>>()?;
+    // Per set: its curves, and each sequence's AUC averaged over the set's runs.
     let mut sets = Vec::new();
     for spec in results {
-        let (name, folder) = match spec.split_once('=') {
-            Some((n, f)) => (n.to_string(), PathBuf::from(f)),
+        let (name, folders) = match spec.split_once('=') {
+            Some((n, f)) => (n.to_string(), f.split(',').map(PathBuf::from).collect::<Vec<_>>()),
             None => {
                 let f = PathBuf::from(spec);
-                (f.file_name().and_then(|n| n.to_str()).unwrap_or(spec).to_string(), f)
+                (f.file_name().and_then(|n| n.to_str()).unwrap_or(spec).to_string(), vec![f])
             }
         };
         let mut runs = Vec::new();
         let mut ms = Vec::new();
-        for (seq, t) in &truths {
-            let boxes = read_boxes(&folder.join(format!("{seq}.txt")))?;
-            if boxes.len() != t.len() {
-                return Err(format!("{name}: {seq} has {} boxes for {} frames", boxes.len(), t.len()));
+        let mut per_seq = vec![0.0; truths.len()];
+        for folder in &folders {
+            for ((seq, t), acc) in truths.iter().zip(per_seq.iter_mut()) {
+                let boxes = read_boxes(&folder.join(format!("{seq}.txt")))?;
+                if boxes.len() != t.len() {
+                    return Err(format!("{name}: {seq} has {} boxes for {} frames", boxes.len(), t.len()));
+                }
+                if let Ok(v) = std::fs::read_to_string(folder.join(format!("{seq}.ms")))
+                    && let Ok(v) = v.trim().parse::<f64>()
+                {
+                    ms.push(v);
+                }
+                *acc += score(&boxes, t).map_or(0.0, |s| s.auc) / folders.len() as f64;
+                runs.push((boxes, t.clone()));
             }
-            if let Ok(v) = std::fs::read_to_string(folder.join(format!("{seq}.ms")))
-                && let Ok(v) = v.trim().parse::<f64>()
-            {
-                ms.push(v);
-            }
-            runs.push((boxes, t.clone()));
         }
-        let ms = (ms.len() == truths.len()).then(|| ms.iter().sum::<f64>() / ms.len() as f64);
-        sets.push(score_set(&name, &runs, ms)?);
+        let ms = (ms.len() == runs.len()).then(|| ms.iter().sum::<f64>() / ms.len() as f64);
+        sets.push((score_set(&name, &runs, ms)?, per_seq));
     }
     let seqs: Vec<&str> = truths.iter().map(|(n, _)| n.as_str()).collect();
     println!("{} sequences: {}", seqs.len(), seqs.join(", "));
     println!();
-    println!("| tracker | mean AUC | mean P20 | ms/frame |");
-    println!("|---|---|---|---|");
-    let mut order: Vec<&SetScore> = sets.iter().collect();
-    order.sort_by(|a, b| b.auc.total_cmp(&a.auc));
-    for r in order {
+    let mean_of = |per_seq: &[f64], names: &[String]| {
+        let v: Vec<f64> =
+            seqs.iter().zip(per_seq).filter(|(n, _)| names.iter().any(|m| m == *n)).map(|(_, &a)| a).collect();
+        fmt3((!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64))
+    };
+    match split {
+        Some(_) => {
+            println!("| tracker | tune AUC | check AUC | mean AUC | mean P20 | ms/frame |");
+            println!("|---|---|---|---|---|---|");
+        }
+        None => {
+            println!("| tracker | mean AUC | mean P20 | ms/frame |");
+            println!("|---|---|---|---|");
+        }
+    }
+    let mut order: Vec<&(SetScore, Vec<f64>)> = sets.iter().collect();
+    order.sort_by(|a, b| b.0.auc.total_cmp(&a.0.auc));
+    for (r, per_seq) in order {
         let ms = r.ms.map(|m| format!("{m:.3}")).unwrap_or_else(|| "-".to_string());
-        println!("| {} | {:.3} | {:.3} | {ms} |", r.name, r.auc, r.p20);
+        match split {
+            Some(sp) => println!(
+                "| {} | {} | {} | {:.3} | {:.3} | {ms} |",
+                r.name,
+                mean_of(per_seq, &sp.tune),
+                mean_of(per_seq, &sp.check),
+                r.auc,
+                r.p20
+            ),
+            None => println!("| {} | {:.3} | {:.3} | {ms} |", r.name, r.auc, r.p20),
+        }
     }
     std::fs::create_dir_all(plots).map_err(|e| format!("{}: {e}", plots.display()))?;
+    let sets: Vec<SetScore> = sets.into_iter().map(|(s, _)| s).collect();
     draw_plots(&sets, plots, &format!("{} sequences", seqs.len()))
 }
 
@@ -720,8 +763,15 @@ fn ablate(paths: &[PathBuf], opts: &AblateOpts<'_>, common: &Common) -> Result<(
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let (paths, mut common, ablation) = match cli.command {
-        Command::Score { truth, results, plots } => {
-            return match score_command(&truth, &results, &plots) {
+        Command::Score { truth, results, plots, split } => {
+            let split = match split.as_deref().map(Split::load).transpose() {
+                Ok(s) => s,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    return ExitCode::FAILURE;
+                }
+            };
+            return match score_command(&truth, &results, &plots, split.as_ref()) {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(e) => {
                     eprintln!("error: {e}");
