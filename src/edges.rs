@@ -441,7 +441,7 @@ struct SobelCells {
 /// checkerboard cells of byte maps go one cell at a time. Out of line and
 /// shared by every pixel format; compiled per cell spacing `XS` (1 or 2
 /// pixels), so that each copy holds only its own loop (measured on the QVGA
-/// audit in session 4: 40 k instructions per frame less than with the
+/// audit: 40 k instructions per frame less than with the
 /// spacing at run time).
 #[inline(never)]
 fn ring_cells<const XS: usize>(

@@ -1,35 +1,6 @@
 //! A `no_std`, allocation-free colour particle-filter object tracker for
 //! small ARM devices.
 //!
-//! The method is the adaptive colour particle filter of Nummiaro, Koller-Meier
-//! and Van Gool: the target is an upright ellipse whose kernel-weighted colour
-//! histogram is compared with a model by the Bhattacharyya coefficient; a set
-//! of `N` hypotheses moves with constant-velocity dynamics, is weighted by
-//! `exp(−d²/2σ²)` and resampled; the model adapts on confident frames; and an
-//! appearance test against the background drives explicit searching /
-//! tracking / lost states.
-//!
-//! # Shape
-//! - [`Frame`]: a checked view of a raw camera buffer (RGB565, RGB888,
-//!   YUV 4:2:2, GRAY8, with stride).
-//! - [`Histogram`], [`Model`]: integer kernel-weighted histograms and the
-//!   target model with its Bhattacharyya coefficient.
-//! - [`Tracker`]: the filter and its life cycle, configured by [`Config`].
-//! - [`MeanShift`]: the single-hypothesis baselines (mean shift, Kalman mean
-//!   shift) on the same frames, histograms and estimates.
-//!
-//! # Numbers
-//! One convention, in [`scalar`]: integers per pixel, `f32` per particle,
-//! using only operations that are bit-identical on x86_64 and ARM, so a seeded
-//! run gives the same track on the host and on a microcontroller.
-//!
-//! # Panics
-//! None on any input. Constructors validate and return [`Error`]; the
-//! per-pixel and per-particle paths use checked slice access and saturating or
-//! wrapping arithmetic where a bound is not evident. The only `assert!`s are
-//! compile-time checks on the const generic capacities.
-//!
-//! # Example
 //! ```
 //! use pftrack::{BoundingBox, Config, Frame, PixelFormat, TrackState, Tracker};
 //!
@@ -49,6 +20,44 @@
 //! assert!(estimate.confidence > 0.9);
 //! # Ok::<(), pftrack::Error>(())
 //! ```
+//!
+//! The method is the adaptive colour particle filter of Nummiaro, Koller-Meier
+//! and Van Gool: the target is an upright ellipse whose kernel-weighted colour
+//! and edge-orientation histograms are compared with a model by the
+//! Bhattacharyya coefficient; a set of `N` hypotheses moves with damped
+//! constant-velocity dynamics, is weighted and resampled; the estimate's size
+//! and shape are searched against the target's surroundings
+//! ([`foreground`]); a confidence (the probability that the estimate is on
+//! the target, [`on_target`]) drives explicit searching / tracking / lost
+//! states and gates the model's adaptation.
+//!
+//! # Shape
+//! - [`Frame`]: a checked view of a raw camera buffer (RGB565, RGB888,
+//!   YUV 4:2:2, GRAY8, with stride).
+//! - [`Histogram`], [`Model`]: integer kernel-weighted histograms and the
+//!   target model with its Bhattacharyya coefficient.
+//! - [`Tracker`]: the filter and its life cycle, configured by [`Config`].
+//! - [`MeanShift`]: the single-hypothesis baselines (mean shift, Kalman mean
+//!   shift) on the same frames, histograms and estimates.
+//!
+//! # Further reading
+//! The repository's `docs/` folder: `method.md` (how it works),
+//! `accuracy.md` (results on real video, the ablation table, the OpenCV
+//! comparison), `performance.md` (the size and speed audits),
+//! `on-the-metal.md` (QEMU, real boards, ARMv6 Linux), `robustness.md`
+//! (errors, fuzzing, soak) and `fixtures.md` (the test scenes).
+//!
+//! # Numbers
+//! One convention, in [`scalar`]: integers per pixel, `f32` per particle,
+//! using only operations that are bit-identical on x86_64 and ARM, so a seeded
+//! run gives the same track on the host and on a microcontroller.
+//!
+//! # Panics
+//! None on any input. Constructors validate and return [`Error`]; the
+//! per-pixel and per-particle paths use checked slice access and saturating or
+//! wrapping arithmetic where a bound is not evident. The only `assert!`s are
+//! compile-time checks on the const generic capacities.
+//!
 #![cfg_attr(not(test), no_std)]
 
 #[cfg(feature = "adaptive-bins")]

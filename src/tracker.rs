@@ -48,10 +48,14 @@ pub enum Event {
 pub struct Estimate {
     /// The mean state's ellipse.
     pub ellipse: Ellipse,
-    /// The similarity between the target model and the mean state, in
-    /// `[0, 1]`: the Bhattacharyya coefficient `ρ` for colour alone, or the
-    /// combined similarity of colour and edges (see
-    /// [`crate::Combination::similarity`]). 1 is a perfect match.
+    /// How sure the tracker is of the estimate, in `[0, 1]`. With
+    /// [`crate::Life::Confidence`] (the default), the probability that the
+    /// estimate is on its target, from how much it stands out from its
+    /// surroundings, its correlation with the first template and its
+    /// colour similarity with the first model (see [`on_target`]); with
+    /// [`crate::Life::Appearance`], the similarity between the model and the
+    /// estimate (the Bhattacharyya coefficient, combined over colour and
+    /// edges, see [`crate::Combination::similarity`]).
     pub confidence: Real,
     /// The state after this step.
     pub state: TrackState,
