@@ -154,6 +154,24 @@ mod tests {
     use super::*;
 
     #[test]
+    fn spread_sigma_puts_the_average_particle_spread_e_folds_below_the_best() {
+        // Reason: by hand. Best d² = 0.1, mean d² = 0.5, spread 8:
+        // 2σ² = 0.4 / 8 = 0.05, offset = 0.1 − 0.05 = 0.05. The best
+        // particle gets exp(−(0.1 − 0.05) / 0.05) = e^−1 (as in every mode),
+        // the average one exp(−(0.5 − 0.05) / 0.05) = e^−9, i.e. e^−8 of it.
+        let l =
+            Likelihood { sigma: Sigma::Spread { spread: 8.0, min: 0.001, max: 1.0 }, eps: 0.0, shape: Shape::Gaussian };
+        let (sigma, offset) = l.sigma_and_offset(0.1, 0.5);
+        assert!((2.0 * sigma * sigma - 0.05).abs() < 1e-6, "{sigma}");
+        assert!((offset - 0.05).abs() < 1e-6, "{offset}");
+        let (best, mean) = (l.weight(0.1 - offset, sigma), l.weight(0.5 - offset, sigma));
+        assert!((best - (-1.0f32).exp()).abs() < 1e-5, "{best}");
+        assert!((mean / best - (-8.0f32).exp()).abs() < 1e-6, "{}", mean / best);
+        // Bounded: no spread at all falls back to the floor.
+        assert_eq!(l.sigma_and_offset(0.3, 0.3).0, 0.001);
+    }
+
+    #[test]
     fn adaptive_sigma_gives_best_particle_log_l_minus_one() {
         // Reason: σ² = d_min²/2 makes d_min²/(2σ²) exactly 1 (paper 3, eq. 24).
         // The exponential shape: σ = d_min makes d_min/σ = 1 as well.

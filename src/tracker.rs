@@ -1362,6 +1362,34 @@ mod tests {
     }
 
     #[test]
+    fn redetection_finds_the_target_where_its_colours_stand_out() {
+        // Reason: ground truth of the generated scene. The tracker learns
+        // the four-coloured target and its grey surroundings; in a frame
+        // where the target has jumped to the far corner, the place whose
+        // colours stand out most from their ring is the target's new box,
+        // within the map's lattice step and the scan's stride (16 px at
+        // this size).
+        let cfg = Config { redetect: true, ..Config::default() };
+        let mut t: Tracker<20> = Tracker::new(cfg, 1).unwrap();
+        t.init(&frame(&scene(None, 0)), BOX).unwrap();
+        let mut moved = vec![100u8; W * H * 3];
+        let base = scene(None, 0);
+        for y in 29..61 {
+            for x in 44..76 {
+                let (nx, ny) = (x + 40, y + 26);
+                if nx < W && ny < H {
+                    moved[(ny * W + nx) * 3..][..3].copy_from_slice(&base[(y * W + x) * 3..][..3]);
+                }
+            }
+        }
+        let target = t.target.as_ref().unwrap();
+        let spots = redetect(&mut t.scratch.fgmap, &frame(&moved), &target.models, target.half_axes);
+        let (x, y) = spots[0].expect("a spot");
+        // The target's centre is now (100, 71), 4 px from the frame's bottom.
+        assert!((x - 100.0).abs() <= 16.0 && (y - 71.0).abs() <= 16.0, "({x}, {y})");
+    }
+
+    #[test]
     fn update_when_degraded_waits_for_the_model_to_go_bad() {
         // Reason: the rule's definition. On an unchanging scene the
         // confidence stays at its learnt ρ₀, above 0.9·ρ₀, so the model is
