@@ -8,7 +8,7 @@
 
 use pftrack::{Config, Frame, MeanShift, MeanShiftConfig, Tracker};
 use pftrack_fixture::{HEADER_LEN, Header, RECORD_META_LEN, RecordMeta};
-use std::io::Read;
+use std::io::{Read, Write};
 use std::process::ExitCode;
 
 /// The firmware's tracker type (firmware/src/main.rs): the defaults.
@@ -55,6 +55,8 @@ fn run(path: &str, seed: u64, kind: &str) -> Result<(), String> {
         Some(c) => Some(Box::new(MeanShift::new(c).map_err(|e| e.to_string())?)),
         None => None,
     };
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
     let mut meta = [0u8; RECORD_META_LEN];
     let mut pixels = vec![0u8; h.frame_len()];
     for i in 0..h.frames {
@@ -69,7 +71,9 @@ fn run(path: &str, seed: u64, kind: &str) -> Result<(), String> {
             (Some(t), 0) => t.init(&frame, m.truth),
             (Some(t), _) => t.step(&frame),
         };
-        println!("{i} {}", est.map_err(|e| format!("frame {i}: {e}"))?.trace());
+        let est = est.map_err(|e| format!("frame {i}: {e}"))?;
+        // A closed pipe is an error to report, not a panic (as println! would).
+        writeln!(out, "{i} {}", est.trace()).map_err(|e| format!("standard output: {e}"))?;
     }
     Ok(())
 }
