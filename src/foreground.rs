@@ -261,21 +261,17 @@ impl<const F: usize> ForegroundMap<F> {
     /// The sum and count of the cells whose pixels lie in `[x0, x1) × [y0, y1)`.
     pub(crate) fn sum(&self, x0: Real, y0: Real, x1: Real, y1: Real) -> (u32, u32) {
         let s = self.step as Real;
-        // Cells i with x0 <= self.x0 + i·step < x1, clipped to the map.
-        let col = |v: Real, n: i32| -> i32 {
-            let c = (v - self.x0 as Real) / s;
-            let c = crate::scalar::clamp(c, 0.0, n as Real);
+        // The first cell at or after coordinate `v` along an axis whose cell
+        // 0 is at `origin` and which has `n` cells (ceil, clipped to [0, n]):
+        // cells i with v0 <= origin + i·step < v1 are those from index(v0)
+        // to index(v1).
+        let index = |v: Real, origin: i32, n: i32| -> i32 {
+            let c = crate::scalar::clamp((v - origin as Real) / s, 0.0, n as Real);
             let f = c as i32;
             if (f as Real) < c { f + 1 } else { f }
         };
-        let row = |v: Real, n: i32| -> i32 {
-            let c = (v - self.y0 as Real) / s;
-            let c = crate::scalar::clamp(c, 0.0, n as Real);
-            let f = c as i32;
-            if (f as Real) < c { f + 1 } else { f }
-        };
-        let (i0, i1) = (col(x0, self.cols), col(x1, self.cols));
-        let (j0, j1) = (row(y0, self.rows), row(y1, self.rows));
+        let (i0, i1) = (index(x0, self.x0, self.cols), index(x1, self.x0, self.cols));
+        let (j0, j1) = (index(y0, self.y0, self.rows), index(y1, self.y0, self.rows));
         if i1 <= i0 || j1 <= j0 {
             return (0, 0);
         }

@@ -102,11 +102,13 @@ pub struct Likelihood {
 impl Likelihood {
     /// The σ to use this frame, given the smallest squared distance of any
     /// particle: adaptive σ gives that particle `log L = −1` in either shape.
+    /// σ from the spread needs the particles' mean distance too (see
+    /// [`Likelihood::sigma_and_offset`]); from the best alone it is its floor.
     pub fn sigma_for(&self, d2_min: Real) -> Real {
         match self.sigma {
             Sigma::Fixed(s) => s,
-            // Needs the spread too: see `sigma_and_offset`.
-            Sigma::Spread { min, .. } => min,
+            // With no spread to measure, the floor.
+            Sigma::Spread { .. } => self.sigma_and_offset(d2_min, d2_min).0,
             Sigma::Adaptive { min, max } => {
                 let d2 = d2_min.max(0.0);
                 let s = match self.shape {

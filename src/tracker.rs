@@ -271,7 +271,8 @@ struct Scratch<const K: usize, const E: usize> {
     map: EdgeMap<E>,
     /// The lattice every region of this frame is read on (the edge map's).
     lattice: Lattice,
-    /// `P(target | colour)` around the estimate, for the size search.
+    /// `P(target | colour)` around the estimate (for the size search and
+    /// the confidence), or over the whole frame (for re-detection).
     fgmap: ForegroundMap<FG_CELLS>,
 }
 
@@ -1127,22 +1128,18 @@ fn redetect<const K: usize>(
                 if !dominated && c > 0.0 {
                     // Weaker neighbours make way; the rest keep their order.
                     let mut kept = [None; SPOTS];
-                    let mut k = 0;
-                    let mut item = Some((x, y, c));
-                    for old in best.iter().flatten().filter(|b| !near(b)) {
-                        if item.is_some_and(|(_, _, ci)| ci >= old.2)
-                            && let Some(slot) = kept.get_mut(k)
-                        {
-                            *slot = item.take();
-                            k += 1;
-                        }
-                        if let Some(slot) = kept.get_mut(k) {
-                            *slot = Some(*old);
-                            k += 1;
-                        }
+                    for (slot, b) in kept.iter_mut().zip(best.iter().flatten().filter(|b| !near(b))) {
+                        *slot = Some(*b);
                     }
-                    if let (Some(slot), Some(_)) = (kept.get_mut(k), item) {
-                        *slot = item;
+                    // The candidate goes before the first spot it matches or
+                    // beats; each one it displaces moves down, the last drops.
+                    let mut item = Some((x, y, c));
+                    for slot in kept.iter_mut() {
+                        let Some(i) = item else { break };
+                        match slot {
+                            Some(b) if b.2 > i.2 => {}
+                            _ => item = slot.replace(i),
+                        }
                     }
                     best = kept;
                 }
