@@ -212,14 +212,20 @@ impl<const E: usize> EdgeMap<E> {
         // formats only: RGB888 (a host format) keeps the general fill, to
         // spare flash.
         let rows_fill = lattice.step() == 1 && shift == 0;
+        // A planar frame's rows are its luma plane's, GRAY8 rows: edges
+        // need nothing else.
         match (frame.format(), rows_fill) {
             (PixelFormat::Rgb565, true) => self.fill_rows::<Rgb565>(frame, bins, threshold, weak),
-            (PixelFormat::Gray8, true) => self.fill_rows::<Gray8>(frame, bins, threshold, weak),
+            (PixelFormat::Gray8 | PixelFormat::I420 | PixelFormat::Nv12, true) => {
+                self.fill_rows::<Gray8>(frame, bins, threshold, weak)
+            }
             (PixelFormat::Yuv422, true) => self.fill_rows::<Yuv422>(frame, bins, threshold, weak),
             (PixelFormat::Rgb565, false) => self.fill::<Rgb565>(frame, bins, threshold, weak),
             (PixelFormat::Rgb888, _) => self.fill::<Rgb888>(frame, bins, threshold, weak),
             (PixelFormat::Yuv422, false) => self.fill::<Yuv422>(frame, bins, threshold, weak),
-            (PixelFormat::Gray8, false) => self.fill::<Gray8>(frame, bins, threshold, weak),
+            (PixelFormat::Gray8 | PixelFormat::I420 | PixelFormat::Nv12, false) => {
+                self.fill::<Gray8>(frame, bins, threshold, weak)
+            }
         }
     }
 

@@ -35,6 +35,44 @@ pub enum FrameError {
         /// The requested width.
         width: usize,
     },
+    /// YUV 4:2:0 shares one chroma sample among 2x2 pixels, so the width
+    /// and the height must be even.
+    OddChromaSize {
+        /// The requested width.
+        width: usize,
+        /// The requested height.
+        height: usize,
+    },
+    /// A chroma plane's stride is shorter than one row of its samples.
+    ChromaStrideTooSmall {
+        /// Which plane.
+        plane: ChromaPlane,
+        /// The plane's stride in bytes.
+        stride: usize,
+        /// The bytes one row of its samples needs.
+        row_bytes: usize,
+    },
+    /// A chroma plane's buffer is shorter than its rows need.
+    ChromaTooSmall {
+        /// Which plane.
+        plane: ChromaPlane,
+        /// Bytes needed (`usize::MAX` if the product overflows).
+        needed: usize,
+        /// Bytes given.
+        got: usize,
+    },
+}
+
+/// A chroma plane of a planar YUV 4:2:0 frame, as [`FrameError`] names it.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ChromaPlane {
+    /// The U (Cb) plane of I420.
+    U,
+    /// The V (Cr) plane of I420.
+    V,
+    /// The interleaved U, V plane of NV12.
+    Uv,
 }
 
 /// What is wrong with one configuration field.
@@ -135,6 +173,15 @@ impl fmt::Display for FrameError {
                 write!(f, "frame buffer holds {got} bytes but the dimensions need {needed}")
             }
             FrameError::OddYuvWidth { width } => write!(f, "YUV 4:2:2 needs an even width, got {width}"),
+            FrameError::OddChromaSize { width, height } => {
+                write!(f, "YUV 4:2:0 needs an even width and height, got {width}x{height}")
+            }
+            FrameError::ChromaStrideTooSmall { plane, stride, row_bytes } => {
+                write!(f, "{plane:?} plane stride {stride} is shorter than a row of {row_bytes} bytes")
+            }
+            FrameError::ChromaTooSmall { plane, needed, got } => {
+                write!(f, "{plane:?} plane holds {got} bytes but the dimensions need {needed}")
+            }
         }
     }
 }

@@ -184,38 +184,39 @@ impl<const K: usize> Histogram<K> {
         // anyway, share one loop that reads pixels through the general
         // accessor. A loop per layout and format would cost more flash than
         // a small target can spare (measured: +6 KB on Cortex-M4 per loop).
-        if layout.is_fast() {
-            match frame.format() {
-                PixelFormat::Rgb565 => self.accumulate::<Rgb565, E>(frame, e, lattice, map, edge),
-                PixelFormat::Rgb888 => self.accumulate::<Rgb888, E>(frame, e, lattice, map, edge),
-                PixelFormat::Yuv422 => self.accumulate::<Yuv422, E>(frame, e, lattice, map, edge),
-                PixelFormat::Gray8 => self.accumulate::<Gray8, E>(frame, e, lattice, map, edge),
-            }
-        } else {
-            let (counts, mut total) = (&mut self.counts, 0u32);
-            let quads = cfg!(feature = "quadrants") && layout.segments == 4;
-            let seg = K / layout.segments.max(1) as usize;
-            let centre = (floor(e.cx), floor(e.cy));
-            let (binning, levels) = (layout.binning, layout.levels);
-            for_each_row(frame, e, lattice, |span| {
-                let y = span.y;
-                let cells = row_cells(map, &span);
-                for (i, (x, w)) in span.enumerate() {
-                    edge.add_to_bin(cells.get(i) as usize, w);
-                    let q = if quads { quadrant(x, y, centre) } else { 0 };
-                    if let Some(rgb) = frame.rgb(x, y) {
-                        let b = match binning {
-                            Binning::Adaptive => levels_bin(rgb, levels.get(q).copied().unwrap_or(2)),
-                            other => other.bin(rgb),
-                        };
-                        if let Some(c) = counts.get_mut(q * seg + b) {
-                            *c = c.wrapping_add(w);
-                            total = total.wrapping_add(w);
+        // The planar formats, whose pixels span planes, take the general
+        // accessor too.
+        match (layout.is_fast(), frame.format()) {
+            (true, PixelFormat::Rgb565) => self.accumulate::<Rgb565, E>(frame, e, lattice, map, edge),
+            (true, PixelFormat::Rgb888) => self.accumulate::<Rgb888, E>(frame, e, lattice, map, edge),
+            (true, PixelFormat::Yuv422) => self.accumulate::<Yuv422, E>(frame, e, lattice, map, edge),
+            (true, PixelFormat::Gray8) => self.accumulate::<Gray8, E>(frame, e, lattice, map, edge),
+            _ => {
+                let (counts, mut total) = (&mut self.counts, 0u32);
+                let quads = cfg!(feature = "quadrants") && layout.segments == 4;
+                let seg = K / layout.segments.max(1) as usize;
+                let centre = (floor(e.cx), floor(e.cy));
+                let (binning, levels) = (layout.binning, layout.levels);
+                for_each_row(frame, e, lattice, |span| {
+                    let y = span.y;
+                    let cells = row_cells(map, &span);
+                    for (i, (x, w)) in span.enumerate() {
+                        edge.add_to_bin(cells.get(i) as usize, w);
+                        let q = if quads { quadrant(x, y, centre) } else { 0 };
+                        if let Some(rgb) = frame.rgb(x, y) {
+                            let b = match binning {
+                                Binning::Adaptive => levels_bin(rgb, levels.get(q).copied().unwrap_or(2)),
+                                other => other.bin(rgb),
+                            };
+                            if let Some(c) = counts.get_mut(q * seg + b) {
+                                *c = c.wrapping_add(w);
+                                total = total.wrapping_add(w);
+                            }
                         }
                     }
-                }
-            });
-            self.total = total;
+                });
+                self.total = total;
+            }
         }
         // 4-bit maps drop the weight of cells with no bin into the nibble
         // form's "none" bin, which no orientation uses (see `take`).
@@ -587,7 +588,9 @@ pub(crate) fn row_bins<F: FnMut(usize, usize)>(
         PixelFormat::Rgb565 => packed_bins::<Rgb565, F>(row, (x0, step, n), visit),
         PixelFormat::Rgb888 => packed_bins::<Rgb888, F>(row, (x0, step, n), visit),
         PixelFormat::Gray8 => packed_bins::<Gray8, F>(row, (x0, step, n), visit),
-        PixelFormat::Yuv422 => general_bins(frame, layout, y, (x0, step, n), visit),
+        PixelFormat::Yuv422 | PixelFormat::I420 | PixelFormat::Nv12 => {
+            general_bins(frame, layout, y, (x0, step, n), visit)
+        }
     }
 }
 

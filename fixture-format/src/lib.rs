@@ -10,18 +10,21 @@
 //! header, 32 bytes
 //!   0   [u8; 8]  magic "PFTRKFX1"
 //!   8   u16      version = 1
-//!   10  u16      pixel format: 1 RGB565 (LE), 2 RGB888, 3 YUV422 (YUYV), 4 GRAY8
+//!   10  u16      pixel format: 1 RGB565 (LE), 2 RGB888, 3 YUV422 (YUYV), 4 GRAY8,
+//!                5 I420 (planar YUV 4:2:0), 6 NV12 (Y plane, interleaved UV)
 //!   12  u16      width, pixels
 //!   14  u16      height, pixels
 //!   16  u32      stride, bytes per row (>= width * bytes per pixel)
 //!   20  u32      frame count
 //!   24  u32      reserved, 0
 //!   28  u32      reserved, 0
-//! frame record, 20 + stride * height bytes, repeated `frame count` times
+//! frame record, 20 + frame bytes, repeated `frame count` times; frame
+//! bytes are stride * height, and for I420 plus 2 * (stride / 2) * (height / 2)
+//! (the U, then the V plane), for NV12 plus stride * (height / 2) (the UV plane)
 //!   0   f32 x4   ground-truth box x, y, w, h (top-left origin, pixels)
 //!   16  u16      visible fraction of the target, per mille (0 = absent or fully hidden)
 //!   18  u16      reserved, 0
-//!   20  [u8]     stride * height bytes of pixels
+//!   20  [u8]     the frame bytes
 //! ```
 //!
 //! Everything is validated and reported as a [`FixtureError`]; nothing
@@ -185,9 +188,11 @@ impl Header {
         b
     }
 
-    /// Bytes of one frame's pixels.
+    /// Bytes of one frame's pixels: every row padded to the stride, and for
+    /// the planar formats the chroma planes after the luma plane, as
+    /// [`PixelFormat::frame_bytes`] lays them out.
     pub fn frame_len(&self) -> usize {
-        self.stride.saturating_mul(self.height)
+        self.format.frame_bytes(self.stride, self.height).unwrap_or(usize::MAX)
     }
 
     /// Bytes of one frame record, metadata included.

@@ -27,10 +27,10 @@ fn config(pick: u8) -> Config {
 fuzz_target!(|input: (u8, u8, u8, u8, [f32; 4], u64, &[u8])| {
     let (w, h, code, pick, b, seed, pixels) = input;
     let (w, h) = (usize::from(w % 48) + 1, usize::from(h % 48) + 1);
-    let Some(format) = PixelFormat::from_code(u16::from(code % 4) + 1) else { return };
-    let bpp = format.bytes_per_pixel();
-    let frame_len = w * h * bpp;
-    if pixels.len() < frame_len || (format == PixelFormat::Yuv422 && w % 2 == 1) {
+    let Some(format) = PixelFormat::from_code(u16::from(code % 6) + 1) else { return };
+    let Some(frame_len) = format.frame_bytes(w * format.bytes_per_pixel(), h) else { return };
+    let odd = (format == PixelFormat::Yuv422 || format.is_planar()) && w % 2 == 1;
+    if pixels.len() < frame_len || odd || (format.is_planar() && h % 2 == 1) {
         return;
     }
     let Ok(first) = Frame::packed(&pixels[..frame_len], w, h, format) else { return };

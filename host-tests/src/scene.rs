@@ -79,6 +79,7 @@ pub fn catalogue() -> Vec<SceneSpec> {
         s("shrink", Story::Shrink, PixelFormat::Rgb565, 40, 8),
         s("turn", Story::Turn, PixelFormat::Yuv422, 40, 9),
         s("cross_over", Story::CrossOver, PixelFormat::Rgb565, 50, 10),
+        s("occlusion_i420", Story::Occlusion, PixelFormat::I420, 44, 11),
     ]
 }
 
@@ -342,6 +343,29 @@ pub fn encode(rgb: &[[u8; 3]], w: usize, h: usize, format: PixelFormat) -> Vec<u
                     let v = (a[2] as u16 + b[2] as u16).div_ceil(2) as u8;
                     out.extend_from_slice(&[a[0], u, b[0], v]);
                 }
+            }
+        }
+        PixelFormat::I420 | PixelFormat::Nv12 => {
+            let yuv: Vec<[u8; 3]> = rgb.iter().map(|&p| rgb_to_yuv(p)).collect();
+            out.extend(yuv.iter().map(|p| p[0]));
+            // Each chroma sample is the rounded mean of its 2x2 block's.
+            let block = |bx: usize, by: usize, c: usize| {
+                let at = |x: usize, y: usize| yuv.get(y.min(h - 1) * w + x.min(w - 1)).map_or(0, |p| p[c] as u16);
+                ((at(2 * bx, 2 * by)
+                    + at(2 * bx + 1, 2 * by)
+                    + at(2 * bx, 2 * by + 1)
+                    + at(2 * bx + 1, 2 * by + 1)
+                    + 2)
+                    / 4) as u8
+            };
+            let (cw, ch) = (w / 2, h / 2);
+            if format == PixelFormat::I420 {
+                for c in [1, 2] {
+                    out.extend((0..ch).flat_map(|by| (0..cw).map(move |bx| (bx, by))).map(|(bx, by)| block(bx, by, c)));
+                }
+            } else {
+                let pairs = (0..ch).flat_map(|by| (0..cw).map(move |bx| (bx, by)));
+                out.extend(pairs.flat_map(|(bx, by)| [block(bx, by, 1), block(bx, by, 2)]));
             }
         }
     }

@@ -61,7 +61,7 @@ fn follows_smooth_scaling_gray_and_occluded_targets() {
     // frames, and the mean IoU must reach 0.5, the usual "success" overlap.
     // The distractor scene is left out on purpose: its decoy has the same
     // colours, which colour alone cannot always tell apart.
-    for name in ["smooth_scale", "gray_smooth", "occlusion"] {
+    for name in ["smooth_scale", "gray_smooth", "occlusion", "occlusion_i420"] {
         let fx = load(name);
         for seed in SEEDS {
             let (est, _) = run(&fx, seed);
