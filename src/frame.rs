@@ -323,7 +323,7 @@ impl<'a> Frame<'a> {
             PixelFormat::I420 | PixelFormat::Nv12 => {
                 let y_value = *row.get(x)? as i32;
                 let [u, v] = self.chroma_at(x / 2, y / 2)?;
-                Some(yuv_to_rgb(y_value, u as i32 - 128, v as i32 - 128))
+                Some(yuv_centred_to_rgb(y_value, u as i32 - 128, v as i32 - 128))
             }
         }
     }
@@ -607,7 +607,7 @@ impl PixelRead for Yuv422 {
         let y = *row.get(2 * x)? as i32;
         let u = *row.get(pair + 1)? as i32 - 128;
         let v = *row.get(pair + 3)? as i32 - 128;
-        Some(yuv_to_rgb(y, u, v))
+        Some(yuv_centred_to_rgb(y, u, v))
     }
 
     #[inline(always)]
@@ -647,9 +647,16 @@ impl PixelRead for Gray8 {
     }
 }
 
-/// Full-range BT.601 YUV to RGB in 8-bit fixed point (coefficients × 256).
+/// Full-range BT.601 YUV to RGB, the conversion every YUV format is read
+/// with (for tools that convert YUV frames the way the tracker sees them).
+pub fn yuv_to_rgb([y, u, v]: [u8; 3]) -> [u8; 3] {
+    yuv_centred_to_rgb(y as i32, u as i32 - 128, v as i32 - 128)
+}
+
+/// Full-range BT.601 YUV to RGB in 8-bit fixed point (coefficients × 256),
+/// chroma centred on 0.
 #[inline(always)]
-fn yuv_to_rgb(y: i32, u: i32, v: i32) -> [u8; 3] {
+fn yuv_centred_to_rgb(y: i32, u: i32, v: i32) -> [u8; 3] {
     let r = y + ((359 * v) >> 8);
     let g = y - ((88 * u + 183 * v) >> 8);
     let b = y + ((454 * u) >> 8);

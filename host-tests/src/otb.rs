@@ -1,6 +1,7 @@
 //! OTB-format sequences: a folder with `img/` (frames sorted by name, JPEG or
 //! PNG) and `groundtruth.txt` (one `x,y,w,h` per line).
 
+use crate::source::{FrameSource, ImageFolder};
 use pftrack::BoundingBox;
 use std::path::{Path, PathBuf};
 
@@ -30,10 +31,9 @@ pub fn parse_groundtruth(text: &str) -> Result<Vec<BoundingBox>, String> {
     Ok(out)
 }
 
-/// The frame files of a sequence, sorted by name.
-pub fn list_images(dir: &Path) -> Result<Vec<PathBuf>, String> {
-    let img = dir.join("img");
-    let rd = std::fs::read_dir(&img).map_err(|e| format!("{}: {e}", img.display()))?;
+/// The JPEG and PNG files directly in `dir`, sorted by name.
+pub fn images_in(dir: &Path) -> Result<Vec<PathBuf>, String> {
+    let rd = std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     let mut files: Vec<PathBuf> = rd
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| {
@@ -45,28 +45,30 @@ pub fn list_images(dir: &Path) -> Result<Vec<PathBuf>, String> {
         .collect();
     files.sort();
     if files.is_empty() {
-        return Err(format!("{}: no JPEG or PNG frames", img.display()));
+        return Err(format!("{}: no JPEG or PNG frames", dir.display()));
     }
     Ok(files)
 }
 
-/// A decoded OTB sequence, frames as packed RGB888.
-pub struct Sequence {
-    /// The folder's name.
-    pub name: String,
-    /// Width in pixels.
-    pub width: usize,
-    /// Height in pixels.
-    pub height: usize,
-    /// Packed RGB888 frames.
-    pub frames: Vec<Vec<u8>>,
-    /// Ground truth, one box per frame.
-    pub truth: Vec<BoundingBox>,
+/// The frame files of a sequence (in its `img/`), sorted by name.
+pub fn list_images(dir: &Path) -> Result<Vec<PathBuf>, String> {
+    images_in(&dir.join("img"))
 }
 
-/// Loads and decodes a sequence, checking that frames and ground truth agree.
-/// `progress` is called after each decoded frame.
-pub fn load(dir: &Path, mut progress: impl FnMut(usize, usize)) -> Result<Sequence, String> {
+/// An OTB sequence opened for streaming: its ground truth, read whole (a
+/// few bytes per frame), and its frames, decoded one at a time.
+pub struct Stream {
+    /// The folder's name.
+    pub name: String,
+    /// Ground truth, one box per frame.
+    pub truth: Vec<BoundingBox>,
+    /// The frames.
+    pub frames: ImageFolder,
+}
+
+/// Opens a sequence folder, checking that frames and ground truth agree in
+/// number.
+pub fn open(dir: &Path) -> Result<Stream, String> {
     let name = dir
         .file_name()
         .and_then(|n| n.to_str())
@@ -84,20 +86,41 @@ pub fn load(dir: &Path, mut progress: impl FnMut(usize, usize)) -> Result<Sequen
             truth.len()
         ));
     }
-    let mut frames = Vec::with_capacity(files.len());
-    let (mut width, mut height) = (0, 0);
-    for (i, f) in files.iter().enumerate() {
-        let img = image::open(f).map_err(|e| format!("{}: {e}", f.display()))?.to_rgb8();
-        let (w, h) = (img.width() as usize, img.height() as usize);
-        if i == 0 {
-            (width, height) = (w, h);
-        } else if (w, h) != (width, height) {
-            return Err(format!("{}: {w}x{h}, but the first frame is {width}x{height}", f.display()));
-        }
-        frames.push(img.into_raw());
-        progress(i + 1, files.len());
+    Ok(Stream { name, truth, frames: ImageFolder::new(files) })
+}
+
+/// A decoded OTB sequence, frames as packed RGB888.
+pub struct Sequence {
+    /// The folder's name.
+    pub name: String,
+    /// Width in pixels.
+    pub width: usize,
+    /// Height in pixels.
+    pub height: usize,
+    /// Packed RGB888 frames.
+    pub frames: Vec<Vec<u8>>,
+    /// Ground truth, one box per frame.
+    pub truth: Vec<BoundingBox>,
+}
+
+/// Loads and decodes a whole sequence into memory (for studies that run it
+/// many times), checking that frames and ground truth agree. `progress` is
+/// called after each decoded frame.
+pub fn load(dir: &Path, mut progress: impl FnMut(usize, usize)) -> Result<Sequence, String> {
+    let Stream { name, truth, mut frames } = open(dir)?;
+    let n = frames.frame_count().unwrap_or(0);
+    let (width, height) = frames.size();
+    let mut decoded = Vec::with_capacity(n);
+    while let Some(f) = frames.next_frame().map_err(|e| format!("{}: {e}", dir.display()))? {
+        decoded.push(host_bytes(&f));
+        progress(decoded.len(), n);
     }
-    Ok(Sequence { name, width, height, frames, truth })
+    Ok(Sequence { name, width, height, frames: decoded, truth })
+}
+
+/// The packed RGB888 bytes of an RGB888 frame.
+fn host_bytes(f: &pftrack::Frame<'_>) -> Vec<u8> {
+    (0..f.height()).filter_map(|y| f.row(y)).flatten().copied().collect()
 }
 
 #[cfg(test)]

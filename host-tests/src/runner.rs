@@ -62,6 +62,112 @@ pub struct Run {
     pub diagnostics: Vec<pftrack::Diagnostics>,
 }
 
+/// A tracker of any [`Method`], stepped one frame at a time: what every
+/// command drives, whether its frames sit in memory or stream past.
+pub enum Session {
+    /// The particle filter.
+    Pf(Box<HostTracker>),
+    /// Mean shift, plain or Kalman-predicted, with its similarity threshold.
+    MeanShift(Box<MeanShift>, f32),
+}
+
+impl Session {
+    /// A tracker of `method` (`config` and `seed` apply to the particle
+    /// filter), initialised on `first` with `init`; returns it and the
+    /// initialisation's estimate.
+    pub fn start(
+        method: Method,
+        config: Config,
+        seed: u64,
+        first: &Frame<'_>,
+        init: BoundingBox,
+    ) -> Result<(Self, Estimate), pftrack::Error> {
+        let ms = |c: MeanShiftConfig| -> Result<(Self, Estimate), pftrack::Error> {
+            let mut t: Box<MeanShift> = Box::new(MeanShift::new(c)?);
+            let est = t.init(first, init)?;
+            Ok((Session::MeanShift(t, c.min_similarity), est))
+        };
+        match method {
+            Method::Pf => {
+                let mut t = Box::new(HostTracker::new(config, seed)?);
+                let est = t.init(first, init)?;
+                Ok((Session::Pf(t), est))
+            }
+            Method::Meanshift => ms(MeanShiftConfig::default()),
+            Method::Kalman => ms(MeanShiftConfig::kalman()),
+        }
+    }
+
+    /// Tracks one more frame.
+    pub fn step(&mut self, frame: &Frame<'_>) -> Result<Estimate, pftrack::Error> {
+        match self {
+            Session::Pf(t) => t.step(frame),
+            Session::MeanShift(t, _) => t.step(frame),
+        }
+    }
+
+    /// The appearance threshold: learnt at initialisation by the particle
+    /// filter, configured for mean shift.
+    pub fn threshold(&self) -> f32 {
+        match self {
+            Session::Pf(t) => t.appearance_threshold().unwrap_or(0.0),
+            Session::MeanShift(_, min) => *min,
+        }
+    }
+
+    /// Every 4th particle's centre (none for mean shift), for pictures.
+    pub fn particles(&self) -> Vec<(f32, f32)> {
+        match self {
+            Session::Pf(t) => t.particles().iter().step_by(4).map(|p| (p.x, p.y)).collect(),
+            Session::MeanShift(..) => Vec::new(),
+        }
+    }
+
+    /// The particle filter's diagnostics of the last step.
+    pub fn diagnostics(&self) -> Option<pftrack::Diagnostics> {
+        match self {
+            Session::Pf(t) => Some(t.diagnostics()),
+            Session::MeanShift(..) => None,
+        }
+    }
+
+    /// The colour levels chosen at initialisation (particle filter only).
+    pub fn colour_levels(&self) -> Option<[u8; 4]> {
+        match self {
+            Session::Pf(t) => t.colour_levels(),
+            Session::MeanShift(..) => None,
+        }
+    }
+}
+
+impl Run {
+    /// An empty run that starts from `init`.
+    pub fn new(init: BoundingBox, session: &Session) -> Self {
+        Run {
+            boxes: vec![init],
+            estimates: Vec::new(),
+            step_ms: Vec::new(),
+            threshold: session.threshold(),
+            colour_levels: session.colour_levels(),
+            particles: Vec::new(),
+            diagnostics: Vec::new(),
+        }
+    }
+
+    /// Steps `session` on `frame` and records the estimate, the step's time
+    /// (collecting particles for pictures is not counted) and the rest.
+    pub fn step(&mut self, session: &mut Session, frame: &Frame<'_>) -> Result<Estimate, pftrack::Error> {
+        let t0 = Instant::now();
+        let est = session.step(frame)?;
+        self.step_ms.push(ms_since(t0));
+        self.boxes.push(est.bbox());
+        self.estimates.push(est);
+        self.particles.push(session.particles());
+        self.diagnostics.extend(session.diagnostics());
+        Ok(est)
+    }
+}
+
 /// Tracks `frames` with `method`, initialised on the first with `init`
 /// (`config` and `seed` apply to the particle filter). `progress` is called
 /// after each frame with (done, total).
@@ -71,30 +177,16 @@ pub fn track_with<'a>(
     seed: u64,
     frames: &[Frame<'a>],
     init: BoundingBox,
-    progress: impl FnMut(usize, usize),
+    mut progress: impl FnMut(usize, usize),
 ) -> Result<Run, pftrack::Error> {
-    match method {
-        Method::Pf => track(config, seed, frames, init, progress),
-        Method::Meanshift => track_meanshift(MeanShiftConfig::default(), frames, init, progress),
-        Method::Kalman => track_meanshift(MeanShiftConfig::kalman(), frames, init, progress),
-    }
-}
-
-/// Tracks `frames` with mean shift configured by `config`.
-pub fn track_meanshift<'a>(
-    config: MeanShiftConfig,
-    frames: &[Frame<'a>],
-    init: BoundingBox,
-    progress: impl FnMut(usize, usize),
-) -> Result<Run, pftrack::Error> {
-    let mut tracker: Box<MeanShift> = Box::new(MeanShift::new(config)?);
     let first = frames.first().ok_or(pftrack::Error::NotInitialised)?;
-    tracker.init(first, init)?;
-    run_steps(frames, init, config.min_similarity, progress, |f| {
-        let t0 = Instant::now();
-        let est = tracker.step(f)?;
-        Ok((est, ms_since(t0), Vec::new()))
-    })
+    let (mut session, _) = Session::start(method, config, seed, first, init)?;
+    let mut run = Run::new(init, &session);
+    for (i, f) in frames.iter().enumerate().skip(1) {
+        run.step(&mut session, f)?;
+        progress(i + 1, frames.len());
+    }
+    Ok(run)
 }
 
 /// Tracks `frames` with the particle filter, initialised on the first with
@@ -106,55 +198,9 @@ pub fn track<'a>(
     init: BoundingBox,
     progress: impl FnMut(usize, usize),
 ) -> Result<Run, pftrack::Error> {
-    let mut tracker = Box::new(HostTracker::new(config, seed)?);
-    let first = frames.first().ok_or(pftrack::Error::NotInitialised)?;
-    tracker.init(first, init)?;
-    let threshold = tracker.appearance_threshold().unwrap_or(0.0);
-    let levels = tracker.colour_levels();
-    let mut diagnostics = Vec::new();
-    let mut run = run_steps(frames, init, threshold, progress, |f| {
-        let t0 = Instant::now();
-        let est = tracker.step(f)?;
-        let ms = ms_since(t0);
-        diagnostics.push(tracker.diagnostics());
-        Ok((est, ms, tracker.particles().iter().step_by(4).map(|p| (p.x, p.y)).collect()))
-    })?;
-    run.colour_levels = levels;
-    run.diagnostics = diagnostics;
-    Ok(run)
+    track_with(Method::Pf, config, seed, frames, init, progress)
 }
 
 fn ms_since(t0: Instant) -> f64 {
     t0.elapsed().as_secs_f64() * 1e3
-}
-
-/// The loop over frames 2.. shared by every tracker: `step` returns the
-/// estimate, the milliseconds its `step` call took (timed by the caller, so
-/// that collecting particles for pictures is not counted), and the particle
-/// centres to draw.
-fn run_steps<'a>(
-    frames: &[Frame<'a>],
-    init: BoundingBox,
-    threshold: f32,
-    mut progress: impl FnMut(usize, usize),
-    mut step: impl FnMut(&Frame<'a>) -> Result<(Estimate, f64, Vec<(f32, f32)>), pftrack::Error>,
-) -> Result<Run, pftrack::Error> {
-    let mut run = Run {
-        boxes: vec![init],
-        estimates: Vec::new(),
-        step_ms: Vec::new(),
-        threshold,
-        colour_levels: None,
-        particles: Vec::new(),
-        diagnostics: Vec::new(),
-    };
-    for (i, f) in frames.iter().enumerate().skip(1) {
-        let (est, ms, particles) = step(f)?;
-        run.step_ms.push(ms);
-        run.boxes.push(est.bbox());
-        run.estimates.push(est);
-        run.particles.push(particles);
-        progress(i + 1, frames.len());
-    }
-    Ok(run)
 }

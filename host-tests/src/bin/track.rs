@@ -5,9 +5,10 @@ use clap::{Parser, Subcommand};
 use host_tests::fixture::Fixture;
 use host_tests::metrics::{Awareness, has_target, median, score};
 use host_tests::otb;
-use host_tests::runner::{Method, PARTICLES, Run, track_with};
+use host_tests::runner::{Method, PARTICLES, Run, Session, track_with};
+use host_tests::source::{FixtureStream, FrameSource, RawSpec, fixture_truth};
 use indicatif::{ProgressBar, ProgressStyle};
-use pftrack::{BoundingBox, Config, Event, Frame, PixelFormat, TrackState};
+use pftrack::{BoundingBox, Config, Estimate, Event, Frame, PixelFormat, TrackState};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -55,8 +56,72 @@ struct Common {
     dump: Option<PathBuf>,
 }
 
+/// The options of `track run`.
+#[derive(clap::Args)]
+struct RunArgs {
+    /// A folder of JPEG/PNG images (sorted by name), a .y4m file, `-` for
+    /// YUV4MPEG2 on standard input (e.g. from `ffmpeg -f yuv4mpegpipe -`),
+    /// or with --raw a raw camera dump (a file or `-`).
+    input: String,
+    /// The target in the first frame: left, top, width, height in pixels.
+    #[arg(long = "box", value_name = "X,Y,W,H", allow_hyphen_values = true)]
+    bbox: String,
+    /// Read INPUT as raw frames back to back: rgb565, rgb888, yuyv, gray8,
+    /// i420 or nv12, rows packed, e.g. `--raw rgb565:320x240`.
+    #[arg(long, value_name = "FORMAT:WxH")]
+    raw: Option<RawSpec>,
+    /// Write the JSON lines to this file instead of standard output.
+    #[arg(long, value_name = "FILE")]
+    json: Option<PathBuf>,
+    /// Write `frame,state,confidence,x,y,w,h` rows to this file instead of
+    /// JSON lines on standard output.
+    #[arg(long, value_name = "FILE")]
+    csv: Option<PathBuf>,
+    /// Write every frame with the estimate drawn as YUV4MPEG2 video to this
+    /// file, or to standard output with `-` (JSON must then go to a file:
+    /// --json or --csv), e.g. `--annotate - | ffmpeg -i - out.mp4`.
+    #[arg(long, value_name = "FILE.y4m")]
+    annotate: Option<String>,
+    /// Write an annotated GIF (at most 300 frames, evenly spaced) to this file.
+    #[arg(long, value_name = "FILE")]
+    gif: Option<PathBuf>,
+    /// At the end, print frames, frames per second, losses and peak memory
+    /// to standard error.
+    #[arg(long)]
+    summary: bool,
+    /// Ground truth to score the track against: an OTB `groundtruth.txt`
+    /// (x,y,w,h per frame) or a .pft fixture; the summary then adds the
+    /// success AUC and the mean IoU over the frames with a target.
+    #[arg(long, value_name = "FILE")]
+    truth: Option<PathBuf>,
+    /// Seed of the tracker's random generator.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Which tracker runs (`--set`s configure the particle filter).
+    #[arg(long, value_enum, default_value_t = Method::Pf)]
+    tracker: Method,
+    /// Override a configuration field, e.g. `--set life=confidence:0.8:0.85` (repeatable).
+    #[arg(long = "set", value_name = "KEY=VALUE")]
+    set: Vec<String>,
+}
+
 #[derive(Subcommand)]
 enum Command {
+    /// Tracks your own footage from one box: a video as Y4M (a file or a
+    /// pipe from ffmpeg), a folder of images or a raw camera dump; one JSON
+    /// line per frame on standard output.
+    Run(RunArgs),
+    /// Writes any input `run` reads (a fixture, a folder of images, a raw
+    /// dump, Y4M) as a YUV4MPEG2 file, e.g. to encode it with ffmpeg.
+    Convert {
+        /// As for `run`.
+        input: String,
+        /// The .y4m file to write, or `-` for standard output.
+        output: String,
+        /// As for `run`.
+        #[arg(long, value_name = "FORMAT:WxH")]
+        raw: Option<RawSpec>,
+    },
     /// OTB sequence folders (img/ + groundtruth.txt); fixture files (.pft) are accepted too.
     Otb {
         /// Sequence folders or .pft fixture files.
@@ -266,35 +331,45 @@ fn evaluate(seq: &Loaded, method: Method, config: Config, seed: u64, quiet: bool
                 .map_err(|e| format!("{}: frame {}: {e}", seq.name, i + 1))
         })
         .collect::<Result<_, _>>()?;
-    let init = *seq.truth.first().ok_or_else(|| format!("{}: no frames", seq.name))?;
-    if !has_target(&init) {
-        return Err(format!("{}: the first ground-truth box has no target to start from", seq.name));
-    }
+    let init = start_box(&seq.name, &seq.truth)?;
     let pb = if quiet { ProgressBar::hidden() } else { bar(frames.len(), "track") };
     pb.set_prefix(seq.name.clone());
     let run = track_with(method, config, seed, &frames, init, |i, _| pb.set_position(i as u64))
         .map_err(|e| format!("{}: {e}", seq.name))?;
     pb.finish_and_clear();
-    let s = score(&run.boxes, &seq.truth).ok_or_else(|| format!("{}: no frame with a target to score", seq.name))?;
+    Ok((row_of(&seq.name, &run, &seq.truth)?, run))
+}
+
+/// The first ground-truth box, if it has a target to start from.
+fn start_box(name: &str, truth: &[BoundingBox]) -> Result<BoundingBox, String> {
+    let init = *truth.first().ok_or_else(|| format!("{name}: no frames"))?;
+    if !has_target(&init) {
+        return Err(format!("{name}: the first ground-truth box has no target to start from"));
+    }
+    Ok(init)
+}
+
+/// A run's scores against the truth.
+fn row_of(name: &str, run: &Run, truth: &[BoundingBox]) -> Result<Row, String> {
+    let s = score(&run.boxes, truth).ok_or_else(|| format!("{name}: no frame with a target to score"))?;
     let count = |ev: Event| run.estimates.iter().filter(|e| e.event == Some(ev)).count();
     let mut aware = Awareness::default();
-    for ((e, b), t) in run.estimates.iter().zip(run.boxes.iter().skip(1)).zip(seq.truth.iter().skip(1)) {
+    for ((e, b), t) in run.estimates.iter().zip(run.boxes.iter().skip(1)).zip(truth.iter().skip(1)) {
         aware.add(b, e.state == TrackState::Tracking, e.confidence, t);
     }
-    let row = Row {
-        name: seq.name.clone(),
+    Ok(Row {
+        name: name.to_string(),
         auc: s.auc,
         p20: s.precision20,
         ms: median(&run.step_ms),
-        frames: seq.frames.len(),
+        frames: run.boxes.len(),
         lost: count(Event::LostTarget),
         reacquired: count(Event::Reacquired),
         aware,
-    };
-    Ok((row, run))
+    })
 }
 
-fn print_frames(seq: &Loaded, run: &Run) {
+fn print_frames(truth: &[BoundingBox], run: &Run) {
     println!("appearance threshold: {:.3}", run.threshold);
     if let Some(l) = run.colour_levels {
         println!("colour levels per channel: {l:?} (the first for the whole ellipse; with quadrants, TL TR BL BR)");
@@ -302,7 +377,7 @@ fn print_frames(seq: &Loaded, run: &Run) {
     println!("{:>5} {:>9} {:>11} {:>5} {:>4} {:>27} {:>27}", "frame", "state", "event", "conf", "app", "box", "truth");
     for (i, e) in run.estimates.iter().enumerate() {
         let b = e.bbox();
-        let t = seq.truth.get(i + 1).copied().unwrap_or_default();
+        let t = truth.get(i + 1).copied().unwrap_or_default();
         println!(
             "{:>5} {:>9} {:>11} {:>5.3} {:>4} {:>6.1},{:>6.1},{:>6.1},{:>6.1} {:>6.1},{:>6.1},{:>6.1},{:>6.1}",
             i + 2,
@@ -322,40 +397,72 @@ fn print_frames(seq: &Loaded, run: &Run) {
     }
 }
 
-/// The annotated animation of a run, and its middle frame as a PNG.
-fn write_pictures(seq: &Loaded, run: &Run, dir: &Path) -> Result<(), String> {
-    use host_tests::picture::{Canvas, annotate, write_gif, write_png};
-    // Small frames are enlarged so the overlay stays legible.
-    let k = (480 / seq.width.max(1)).clamp(1, 4);
-    // At most 300 frames in the animation, evenly spaced.
-    let every = seq.frames.len().div_ceil(300).max(1);
-    let mut canvases = Vec::new();
-    for (i, px) in seq.frames.iter().enumerate().step_by(every) {
-        let f = Frame::new(px, seq.width, seq.height, seq.stride, seq.format).map_err(|e| e.to_string())?;
-        let mut c = Canvas::new(seq.width, seq.height, host_tests::scene::to_rgb(&f));
-        let truth = seq.truth.get(i).filter(|t| has_target(t));
-        let (est, parts) = match i.checked_sub(1) {
-            Some(j) => (run.estimates.get(j), run.particles.get(j).map(Vec::as_slice).unwrap_or(&[])),
-            None => (None, &[][..]),
-        };
-        annotate(&mut c, est, truth, parts);
-        canvases.push(c.scaled(k));
-    }
-    write_gif(&dir.join(format!("{}.gif", seq.name)), &canvases, 66)?;
-    if let Some(mid) = canvases.get(canvases.len() / 2) {
-        write_png(&dir.join(format!("{}.png", seq.name)), mid)?;
-    }
-    Ok(())
+/// A sequence opened for streaming: its name, its frames, and its truth
+/// (read whole from an OTB folder; a fixture's comes with each frame).
+struct Opened {
+    name: String,
+    frames: Box<dyn FrameSource>,
+    truth: Vec<BoundingBox>,
 }
 
+fn open_sequence(path: &Path) -> Result<Opened, String> {
+    if path.is_file() {
+        let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("fixture").to_string();
+        let reader = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let frames = FixtureStream::new(Box::new(reader)).map_err(|e| format!("{}: {e}", path.display()))?;
+        return Ok(Opened { name, frames: Box::new(frames), truth: fixture_truth(path)? });
+    }
+    if !path.is_dir() {
+        return Err(format!("{}: no such file or folder", path.display()));
+    }
+    let s = otb::open(path)?;
+    Ok(Opened { name: s.name, frames: Box::new(s.frames), truth: s.truth })
+}
+
+/// Tracks one sequence as it streams past, one frame in memory at a time,
+/// writes its track (and with `--gif` its pictures), and scores it.
 fn run_one(path: &Path, common: &Common) -> Result<(Row, Vec<BoundingBox>, Vec<BoundingBox>), String> {
-    let seq = load(path)?;
-    let (row, run) = evaluate(&seq, common.tracker, common.config, common.seed, false)?;
+    use host_tests::picture::{Canvas, annotate, write_gif, write_png};
+    let Opened { name, mut frames, truth } = open_sequence(path)?;
+    let n = frames.frame_count().unwrap_or(0);
+    let pb = bar(n, "track");
+    pb.set_prefix(name.clone());
+    // At most 300 frames in the animation, evenly spaced; small frames are
+    // enlarged so the overlay stays legible.
+    let every = n.div_ceil(300).max(1);
+    let k = (480 / frames.size().0.max(1)).clamp(1, 4);
+    let mut canvases = Vec::new();
+    let mut picture =
+        |i: usize, f: &Frame<'_>, est: Option<&Estimate>, truth: Option<&BoundingBox>, parts: &[(f32, f32)]| {
+            if common.gif && i.is_multiple_of(every) {
+                let mut c = Canvas::new(f.width(), f.height(), host_tests::scene::to_rgb(f));
+                annotate(&mut c, est, truth.filter(|t| has_target(t)), parts);
+                canvases.push(c.scaled(k));
+            }
+        };
+    let first = frames.next_frame().map_err(|e| format!("{name}: {e}"))?.ok_or_else(|| format!("{name}: no frames"))?;
+    let init = start_box(&name, &truth)?;
+    let (mut session, _) =
+        Session::start(common.tracker, common.config, common.seed, &first, init).map_err(|e| format!("{name}: {e}"))?;
+    picture(0, &first, None, truth.first(), &[]);
+    let mut run = Run::new(init, &session);
+    let mut i = 1;
+    while let Some(f) = frames.next_frame().map_err(|e| format!("{name}: {e}"))? {
+        let est = run.step(&mut session, &f).map_err(|e| format!("{name}: frame {}: {e}", i + 1))?;
+        picture(i, &f, Some(&est), truth.get(i), &session.particles());
+        i += 1;
+        pb.set_position(i as u64);
+    }
+    pb.finish_and_clear();
+    let row = row_of(&name, &run, &truth)?;
     if common.frames {
-        print_frames(&seq, &run);
+        print_frames(&truth, &run);
     }
     if common.gif {
-        write_pictures(&seq, &run, &common.out_dir)?;
+        write_gif(&common.out_dir.join(format!("{name}.gif")), &canvases, 66)?;
+        if let Some(mid) = canvases.get(canvases.len() / 2) {
+            write_png(&common.out_dir.join(format!("{name}.png")), mid)?;
+        }
     }
     if let Some(path) = &common.dump {
         use std::io::Write;
@@ -366,10 +473,10 @@ fn run_one(path: &Path, common: &Common) -> Result<(Row, Vec<BoundingBox>, Vec<B
             .map_err(|e| format!("{}: {e}", path.display()))?;
         let mut text = String::new();
         for (i, ((e, d), b)) in run.estimates.iter().zip(&run.diagnostics).zip(run.boxes.iter().skip(1)).enumerate() {
-            let Some(t) = seq.truth.get(i + 1).filter(|t| has_target(t)) else { continue };
+            let Some(t) = truth.get(i + 1).filter(|t| has_target(t)) else { continue };
             text += &format!(
                 "{},{},{:.4},{},{:.4},{:.4},{:.4},{:.4},{:.4}\n",
-                seq.name,
+                name,
                 i + 2,
                 b.iou(t),
                 (e.state == TrackState::Tracking) as u8,
@@ -382,13 +489,13 @@ fn run_one(path: &Path, common: &Common) -> Result<(Row, Vec<BoundingBox>, Vec<B
         }
         f.write_all(text.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
     }
-    let out = common.out_dir.join(format!("{}.txt", seq.name));
+    let out = common.out_dir.join(format!("{}.txt", name));
     let text: String =
         run.boxes.iter().map(|b| format!("{:.2},{:.2},{:.2},{:.2}\n", b.x, b.y, b.width, b.height)).collect();
     std::fs::write(&out, text).map_err(|e| format!("{}: {e}", out.display()))?;
-    let ms = common.out_dir.join(format!("{}.ms", seq.name));
+    let ms = common.out_dir.join(format!("{}.ms", name));
     std::fs::write(&ms, format!("{:.4}\n", row.ms)).map_err(|e| format!("{}: {e}", ms.display()))?;
-    Ok((row, run.boxes, seq.truth))
+    Ok((row, run.boxes, truth))
 }
 
 /// One result set's curves and mean scores over its sequences.
@@ -763,6 +870,24 @@ fn ablate(paths: &[PathBuf], opts: &AblateOpts<'_>, common: &Common) -> Result<(
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let (paths, mut common, ablation) = match cli.command {
+        Command::Convert { input, output, raw } => {
+            return match convert_command(&input, &output, raw) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
+            };
+        }
+        Command::Run(args) => {
+            return match run_command(&args) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
+            };
+        }
         Command::Score { truth, results, plots, split } => {
             let split = match split.as_deref().map(Split::load).transpose() {
                 Ok(s) => s,
@@ -871,4 +996,202 @@ fn main() -> ExitCode {
         }
     }
     if failed { ExitCode::FAILURE } else { ExitCode::SUCCESS }
+}
+
+/// Where `track run` writes the records.
+enum Sink {
+    Json(Box<dyn std::io::Write>),
+    Csv(Box<dyn std::io::Write>),
+}
+
+fn create(path: &Path) -> Result<Box<dyn std::io::Write>, String> {
+    let f = std::fs::File::create(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(Box::new(std::io::BufWriter::new(f)))
+}
+
+/// The peak resident memory of this process in bytes (Linux's VmHWM), if known.
+fn peak_memory() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// `track run`: one frame in memory at a time, every record written and
+/// flushed as its frame is done, so that an error or an endless stream
+/// leaves everything tracked so far on the output.
+fn run_command(a: &RunArgs) -> Result<(), String> {
+    use host_tests::picture::{Canvas, annotate, write_gif};
+    use host_tests::record::{Record, Y4mWriter};
+    use std::io::Write;
+    let mut config = Config::default();
+    for s in &a.set {
+        host_tests::settings::apply(&mut config, s).map_err(|e| format!("--set {e}"))?;
+    }
+    config.validate().map_err(|e| e.to_string())?;
+    let v: Vec<f32> = a
+        .bbox
+        .split(',')
+        .map(|t| t.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("--box `{}` is not four numbers X,Y,W,H", a.bbox))?;
+    let [x, y, w, h] = v[..] else { return Err(format!("--box `{}` is not four numbers X,Y,W,H", a.bbox)) };
+    let init = BoundingBox::new(x, y, w, h);
+    let stdout_video = a.annotate.as_deref() == Some("-");
+    if stdout_video && a.json.is_none() && a.csv.is_none() {
+        return Err("--annotate - writes video to standard output: give --json FILE or --csv FILE for the track".into());
+    }
+    let mut sinks = Vec::new();
+    if let Some(p) = &a.json {
+        sinks.push(Sink::Json(create(p)?));
+    }
+    if let Some(p) = &a.csv {
+        let mut out = create(p)?;
+        writeln!(out, "{}", Record::CSV_HEADER).map_err(|e| format!("{}: {e}", p.display()))?;
+        sinks.push(Sink::Csv(out));
+    }
+    if sinks.is_empty() {
+        sinks.push(Sink::Json(Box::new(std::io::stdout().lock())));
+    }
+    // A reader that stops reading (`| head`) ends the run quietly, with
+    // what it wanted written: `closed` says so.
+    let closed = std::cell::Cell::new(false);
+    let mut write = |r: &Record| -> Result<(), String> {
+        for s in &mut sinks {
+            let (out, line) = match s {
+                Sink::Json(o) => (o, r.json()),
+                Sink::Csv(o) => (o, r.csv()),
+            };
+            match writeln!(out, "{line}").and_then(|_| out.flush()) {
+                Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => closed.set(true),
+                other => other.map_err(|e| format!("writing the track: {e}"))?,
+            }
+        }
+        Ok(())
+    };
+
+    let mut src = host_tests::source::open(&a.input, a.raw)?;
+    let size = src.size();
+    let rate = src.rate().unwrap_or((30, 1));
+    let mut video = match a.annotate.as_deref() {
+        None => None,
+        Some("-") => Some(Y4mWriter::new(
+            Box::new(std::io::BufWriter::new(std::io::stdout().lock())) as Box<dyn Write>,
+            size,
+            rate,
+        )?),
+        Some(p) => Some(Y4mWriter::new(create(Path::new(p))?, size, rate)?),
+    };
+    // The GIF keeps at most 300 frames however long the input: every
+    // `every`-th frame, and when it is full every other one is dropped and
+    // `every` doubles.
+    let (mut gif, mut every) = (Vec::new(), 1usize);
+    let k = (480 / size.0.max(1)).clamp(1, 4);
+    let mut keep = |i: usize, f: &Frame<'_>, est: &Estimate, parts: &[(f32, f32)]| {
+        if a.gif.is_some() && i.is_multiple_of(every) {
+            let mut c = Canvas::new(f.width(), f.height(), host_tests::scene::to_rgb(f));
+            annotate(&mut c, Some(est), None, parts);
+            gif.push(c.scaled(k));
+            if gif.len() >= 300 {
+                let mut n = 0;
+                gif.retain(|_| {
+                    n += 1;
+                    n % 2 == 1
+                });
+                every *= 2;
+            }
+        }
+    };
+    let pb = ProgressBar::new_spinner();
+    pb.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+    pb.set_style(
+        ProgressStyle::with_template("{spinner} {pos} frames, {per_sec} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+    );
+    let truth = match &a.truth {
+        None => None,
+        Some(p) if p.extension().is_some_and(|e| e == "pft") => Some(fixture_truth(p)?),
+        Some(p) => Some(
+            std::fs::read_to_string(p)
+                .map_err(|e| e.to_string())
+                .and_then(|t| otb::parse_groundtruth(&t))
+                .map_err(|e| format!("{}: {e}", p.display()))?,
+        ),
+    };
+    let mut boxes = Vec::new();
+    let t0 = std::time::Instant::now();
+    let first = src.next_frame()?.ok_or_else(|| format!("{}: no frames", a.input))?;
+    let (mut session, est0) =
+        Session::start(a.tracker, config, a.seed, &first, init).map_err(|e| format!("frame 1: {e}"))?;
+    write(&Record::initial(init))?;
+    if truth.is_some() {
+        boxes.push(init);
+    }
+    if let Some(v) = &mut video {
+        v.write(&first, Some(&est0), &session.particles())?;
+    }
+    keep(0, &first, &est0, &session.particles());
+    let (mut frames, mut lost, mut found, mut tracking) = (1usize, 0usize, 0usize, 1usize);
+    while !closed.get()
+        && let Some(f) = src.next_frame()?
+    {
+        frames += 1;
+        let est = session.step(&f).map_err(|e| format!("frame {frames}: {e}"))?;
+        write(&Record::of(frames, &est))?;
+        if truth.is_some() {
+            boxes.push(est.bbox());
+        }
+        if let Some(v) = &mut video {
+            v.write(&f, Some(&est), &session.particles())?;
+        }
+        keep(frames - 1, &f, &est, &session.particles());
+        lost += usize::from(est.event == Some(Event::LostTarget));
+        found += usize::from(est.event == Some(Event::Reacquired));
+        tracking += usize::from(est.state == TrackState::Tracking);
+        pb.set_position(frames as u64);
+        pb.set_message(host_tests::record::state_name(est.state));
+    }
+    pb.finish_and_clear();
+    drop(video);
+    if let Some(path) = &a.gif {
+        write_gif(path, &gif, (66 * every as u32).min(1000))?;
+    }
+    if let Some(t) = &truth {
+        let scored = t.get(..boxes.len()).and_then(|t| score(&boxes, t)).ok_or_else(|| {
+            format!("--truth has {} boxes for {} frames, or none with a target", t.len(), boxes.len())
+        })?;
+        let ious: Vec<f64> = boxes.iter().zip(t).filter(|(_, t)| has_target(t)).map(|(b, t)| b.iou(t) as f64).collect();
+        eprintln!(
+            "against the truth: success AUC {:.3}, mean IoU {:.3} over {} frames with a target",
+            scored.auc,
+            ious.iter().sum::<f64>() / ious.len().max(1) as f64,
+            ious.len()
+        );
+    }
+    if a.summary {
+        let secs = t0.elapsed().as_secs_f64();
+        eprintln!(
+            "{frames} frames in {secs:.2} s ({:.0} fps), tracking {:.1}% of frames, lost {lost} times, re-acquired {found} times, peak memory {}",
+            frames as f64 / secs.max(1e-9),
+            100.0 * tracking as f64 / frames as f64,
+            peak_memory().map_or_else(|| "unknown".to_string(), |b| format!("{:.1} MB", b as f64 / 1e6)),
+        );
+    }
+    Ok(())
+}
+
+/// `track convert`: any input as a Y4M file, one frame at a time.
+fn convert_command(input: &str, output: &str, raw: Option<RawSpec>) -> Result<(), String> {
+    use host_tests::record::Y4mWriter;
+    let mut src = host_tests::source::open(input, raw)?;
+    let (size, rate) = (src.size(), src.rate().unwrap_or((30, 1)));
+    let out: Box<dyn std::io::Write> = match output {
+        "-" => Box::new(std::io::BufWriter::new(std::io::stdout().lock())),
+        p => create(Path::new(p))?,
+    };
+    let mut video = Y4mWriter::new(out, size, rate)?;
+    while let Some(f) = src.next_frame()? {
+        video.write(&f, None, &[])?;
+    }
+    Ok(())
 }
