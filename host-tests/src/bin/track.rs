@@ -985,7 +985,11 @@ fn main() -> ExitCode {
         rows.iter().for_each(|r| pooled.merge(&r.aware));
         println!("{}", describe(&pooled));
     }
-    println!("tracks written to {}", common.out_dir.display());
+    println!(
+        "tracks written to {}; peak memory {}",
+        common.out_dir.display(),
+        peak_memory().map_or_else(|| "unknown".to_string(), |b| format!("{:.1} MB", b as f64 / 1e6))
+    );
     if common.plots && !scored.is_empty() {
         let ms = (!rows.is_empty()).then(|| rows.iter().map(|r| r.ms).sum::<f64>() / rows.len() as f64);
         let drawn = score_set(common.tracker.label(), &scored, ms)
