@@ -108,6 +108,21 @@ pub fn audit_catalogue() -> Vec<SceneSpec> {
     ]
 }
 
+/// The throughput benchmark's scene (`tools/run-throughput`, generated on
+/// demand): the audit story at 640x360 in I420, as a video decoder hands
+/// frames over, 300 frames (ten seconds at 30 fps).
+pub fn throughput_scene() -> SceneSpec {
+    SceneSpec {
+        name: "throughput_360p_i420",
+        story: Story::Audit,
+        format: PixelFormat::I420,
+        width: 640,
+        height: 360,
+        frames: 300,
+        seed: 7,
+    }
+}
+
 /// Colours of the target and the distractor.
 const BODY: [f64; 3] = [215.0, 45.0, 35.0];
 const STRIPE: [f64; 3] = [235.0, 200.0, 40.0];

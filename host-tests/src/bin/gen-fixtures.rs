@@ -2,7 +2,7 @@
 //! generator, or checks that the committed files are what it generates.
 
 use clap::Parser;
-use host_tests::scene::{audit_catalogue, catalogue, generate};
+use host_tests::scene::{audit_catalogue, catalogue, generate, throughput_scene};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -18,6 +18,9 @@ struct Args {
     /// Write the speed audit's scenes instead of the committed set.
     #[arg(long)]
     audit: bool,
+    /// Write the throughput benchmark's scene instead of the committed set.
+    #[arg(long)]
+    throughput: bool,
 }
 
 fn main() -> ExitCode {
@@ -29,7 +32,11 @@ fn main() -> ExitCode {
         return ExitCode::FAILURE;
     }
     let mut ok = true;
-    let specs = if args.audit { audit_catalogue() } else { catalogue() };
+    let specs = match (args.audit, args.throughput) {
+        (true, _) => audit_catalogue(),
+        (_, true) => vec![throughput_scene()],
+        _ => catalogue(),
+    };
     for spec in specs {
         let bytes = generate(&spec).to_bytes();
         let path = args.out_dir.join(format!("{}.pft", spec.name));
