@@ -4,11 +4,16 @@
 //! instruction counts, peak stack and a verdict. Exits 0 on success.
 //!
 //! Run it with `cargo qemu fixtures/occlusion.pft 1` (QEMU's MPS2 AN386
-//! board; see the README). A third word picks the tracker: `pf` (the
-//! particle filter, default), `meanshift` or `kalman` (the baselines).
+//! board; see the README), or built for the STM32F405 with
+//! `cargo qemu-f405 fixtures/occlusion.pft 1` (QEMU's netduinoplus2). A third
+//! word picks the tracker: `pf` (the particle filter, default), `meanshift`
+//! or `kalman` (the baselines).
 #![no_std]
 #![no_main]
 
+// Shared with the pan-tilt example, which uses the rest of it.
+#[allow(dead_code)]
+mod board;
 mod host;
 
 use core::fmt::Write;
@@ -20,11 +25,7 @@ use cortex_m_semihosting::hio;
 use defmt_semihosting as _;
 use pftrack::{BoundingBox, Config, Estimate, Frame, MeanShift, MeanShiftConfig, Tracker};
 
-/// The largest frame the firmware holds: QVGA RGB565. Frames are streamed
-/// one at a time through this buffer, so memory does not grow with length.
-const FRAME_BYTES: usize = 320 * 240 * 2;
-/// Instructions per SysTick tick under `-icount shift=0` on mps2-an386.
-const INSTRUCTIONS_PER_TICK: u32 = 40;
+use board::FRAME_BYTES;
 /// Most frames whose instruction counts are kept for the median.
 const MAX_FRAMES: usize = 512;
 /// The value the unused stack is painted with.
@@ -76,6 +77,7 @@ fn main() -> ! {
 }
 
 fn run() -> bool {
+    board::init();
     // With defmt, stdout carries the binary defmt stream; text goes to stderr.
     let out = if cfg!(feature = "defmt") { hio::hstderr() } else { hio::hstdout() };
     let Ok(mut out) = out else { return false };
@@ -99,7 +101,10 @@ fn run() -> bool {
     let (format, width, height, stride, count) = (h.format, h.width, h.height, h.stride, h.frames);
     let frame_len = h.frame_len();
     if frame_len > FRAME_BYTES {
-        fail!("{width}x{height} frames need {frame_len} bytes; this firmware holds {FRAME_BYTES}");
+        fail!(
+            "{width}x{height} {format:?} frames need {frame_len} bytes; this build ({}) holds {FRAME_BYTES}",
+            board::NAME
+        );
     }
 
     let Some(pixels) = cortex_m::singleton!(: [u8; FRAME_BYTES] = [0; FRAME_BYTES]) else { fail!("buffer taken") };
@@ -122,6 +127,7 @@ fn run() -> bool {
     cp.SYST.clear_current();
     cp.SYST.enable_counter();
 
+    let _ = writeln!(out, "board {}", board::NAME);
     let _ = writeln!(out, "fixture {path} {width}x{height} {format:?} frames {count} seed {seed} tracker {kind}");
     let mut stack_floor = paint_stack();
     let mut init_stack = None;
@@ -166,24 +172,26 @@ fn run() -> bool {
     let peak = stack_floor.map(peak_stack);
 
     let steps = &mut ticks[..measured];
-    // Every step in order, so that an outlier frame can be found.
-    let _ = write!(out, "instructions per step, in order:");
-    for t in steps.iter() {
-        let _ = write!(out, " {}", t * INSTRUCTIONS_PER_TICK);
-    }
-    let _ = writeln!(out);
-    steps.sort_unstable();
-    if let (Some(min), Some(max)) = (steps.first(), steps.last()) {
-        let med = steps[steps.len() / 2];
-        let _ = writeln!(
-            out,
-            "instructions per step: min {} median {} max {} ({} steps, {} instructions per SysTick tick)",
-            min * INSTRUCTIONS_PER_TICK,
-            med * INSTRUCTIONS_PER_TICK,
-            max * INSTRUCTIONS_PER_TICK,
-            steps.len(),
-            INSTRUCTIONS_PER_TICK
-        );
+    if let Some(per_tick) = board::INSTRUCTIONS_PER_TICK {
+        // Every step in order, so that an outlier frame can be found.
+        let _ = write!(out, "instructions per step, in order:");
+        for t in steps.iter() {
+            let _ = write!(out, " {}", t * per_tick);
+        }
+        let _ = writeln!(out);
+        steps.sort_unstable();
+        if let (Some(min), Some(max)) = (steps.first(), steps.last()) {
+            let med = steps[steps.len() / 2];
+            let _ = writeln!(
+                out,
+                "instructions per step: min {} median {} max {} ({} steps, {} instructions per SysTick tick)",
+                min * per_tick,
+                med * per_tick,
+                max * per_tick,
+                steps.len(),
+                per_tick
+            );
+        }
     }
     if let (Some(i), Some(p)) = (init_stack, peak) {
         let _ = writeln!(out, "peak stack: init {i} bytes, step {p} bytes");

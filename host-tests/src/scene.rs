@@ -83,10 +83,23 @@ pub fn catalogue() -> Vec<SceneSpec> {
     ]
 }
 
-/// The speed audit's scenes (generated on demand, not committed): QVGA
-/// RGB565 with a 40x40 target, and the same scene in QQVGA GRAY8.
+/// The audits' scenes (generated on demand, not committed): QVGA RGB565
+/// with a 40x40 target, and the same scene in QQVGA GRAY8 (the speed
+/// audit), QQVGA RGB565 and QVGA GRAY8 (the largest frames of each format
+/// the STM32F405 build holds).
 pub fn audit_catalogue() -> Vec<SceneSpec> {
+    let audit = |name, format, width, height| SceneSpec {
+        name,
+        story: Story::Audit,
+        format,
+        width,
+        height,
+        frames: 20,
+        seed: 7,
+    };
     vec![
+        audit("audit_qqvga_rgb565", PixelFormat::Rgb565, 160, 120),
+        audit("audit_qvga_gray8", PixelFormat::Gray8, 320, 240),
         SceneSpec {
             name: "audit_qvga_rgb565",
             story: Story::Audit,

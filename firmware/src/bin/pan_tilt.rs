@@ -3,13 +3,16 @@
 //! The tracker runs on a recorded fixture, read from the host over
 //! semihosting as in the main firmware; each estimate goes to
 //! `pftrack::follower::PanTilt`, which drives two servo PWM channels and a
-//! lock LED through embedded-hal 1.0 traits. QEMU's board has no servos, so
-//! the channels and the LED here are small recorders that print what a
-//! timer and a GPIO pin would be told; on a board, pass your HAL's PWM
-//! channels (`SetDutyCycle`) and LED pin (`OutputPin`) instead and nothing
-//! else changes.
+//! lock LED through embedded-hal 1.0 traits. QEMU's mps2-an386 board has no
+//! timers, so there the channels and the LED are small recorders that print
+//! what a timer and a GPIO pin would be told. The STM32F405 build drives a
+//! real timer through the chip's HAL (`board.rs`): TIM2's channels 1 and 2
+//! as 50 Hz PWM, and the duties printed are read back from its compare
+//! registers; the LED is a GPIO pin. On your board, pass your HAL's PWM
+//! channels (`SetDutyCycle`) and LED pin (`OutputPin`) the same way.
 //!
-//! `cargo qemu-pantilt [FIXTURE [SEED]]` (default fixtures/smooth_scale.pft).
+//! `cargo qemu-pantilt [FIXTURE [SEED]]` (default fixtures/smooth_scale.pft),
+//! `cargo qemu-f405-pantilt [FIXTURE [SEED]]` on the STM32F405.
 //! Exits 0 when the pan servo turned towards the target on at least 90% of
 //! the frames where the target was off-centre (the camera does not move in
 //! the recording, so this checks the controller's direction, not a closed
@@ -17,63 +20,20 @@
 #![no_std]
 #![no_main]
 
+// Shared with the main firmware, which uses the rest of it.
+#[allow(dead_code)]
+#[path = "../board.rs"]
+mod board;
 #[path = "../host.rs"]
 mod host;
 
-use core::convert::Infallible;
+use board::{DutyReadback, FRAME_BYTES, LevelReadback};
 use core::fmt::Write;
 use cortex_m_rt::entry;
 use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
 use cortex_m_semihosting::hio;
-use embedded_hal::digital::{ErrorType as PinErrorType, OutputPin};
-use embedded_hal::pwm::{ErrorType as PwmErrorType, SetDutyCycle};
 use pftrack::follower::{FollowerConfig, PanTilt};
 use pftrack::{Config, Frame, TrackState, Tracker};
-
-/// Largest frame held: QQVGA RGB565 would do for the committed fixtures.
-const FRAME_BYTES: usize = 320 * 240 * 2;
-
-/// A PWM channel that remembers its duty: what a 50 Hz servo timer counting
-/// at 1 MHz would be given (20,000 ticks per period).
-struct Servo {
-    duty: u16,
-}
-
-impl PwmErrorType for Servo {
-    type Error = Infallible;
-}
-
-impl SetDutyCycle for Servo {
-    fn max_duty_cycle(&self) -> u16 {
-        20_000
-    }
-
-    fn set_duty_cycle(&mut self, duty: u16) -> Result<(), Infallible> {
-        self.duty = duty;
-        Ok(())
-    }
-}
-
-/// A GPIO pin that remembers its level.
-struct Led {
-    on: bool,
-}
-
-impl PinErrorType for Led {
-    type Error = Infallible;
-}
-
-impl OutputPin for Led {
-    fn set_low(&mut self) -> Result<(), Infallible> {
-        self.on = false;
-        Ok(())
-    }
-
-    fn set_high(&mut self) -> Result<(), Infallible> {
-        self.on = true;
-        Ok(())
-    }
-}
 
 #[entry]
 fn main() -> ! {
@@ -108,12 +68,13 @@ fn run() -> bool {
     }
     let Some(pixels) = cortex_m::singleton!(: [u8; FRAME_BYTES] = [0; FRAME_BYTES]) else { fail!("buffer taken") };
     let Some(tracker) = make_tracker(seed) else { fail!("tracker") };
-    let mut head =
-        match PanTilt::new(Servo { duty: 0 }, Servo { duty: 0 }, Led { on: false }, FollowerConfig::default()) {
-            Ok(head) => head,
-            Err(_) => fail!("follower configuration"),
-        };
+    let Some((pan, tilt, led)) = board::head() else { fail!("peripherals taken") };
+    let mut head = match PanTilt::new(pan, tilt, led, FollowerConfig::default()) {
+        Ok(head) => head,
+        Err(_) => fail!("follower configuration"),
+    };
 
+    let _ = writeln!(out, "board {}", board::NAME);
     let _ = writeln!(out, "fixture {path} {}x{} frames {} seed {seed}", h.width, h.height, h.frames);
     let _ = writeln!(out, "frame state     target-x  pan   tilt  pan-duty tilt-duty led");
     // Each tracked frame with the target off-centre should turn the head
@@ -156,9 +117,9 @@ fn run() -> bool {
                     TrackState::Lost => "lost",
                 },
                 est.ellipse.cx,
-                p.duty,
-                t.duty,
-                if l.on { "on" } else { "off" }
+                p.duty(),
+                t.duty(),
+                if l.is_on() { "on" } else { "off" }
             );
         }
     }

@@ -14,11 +14,15 @@
 #![no_main]
 
 use cortex_m_rt::entry;
+// The STM32F405 build's device crate provides the interrupt vectors its
+// cortex-m-rt expects.
 use pftrack::{
     Binning, BoundaryCue, BoundingBox, Config, Frame, MeanShift, MeanShiftConfig, ModelUpdate, PixelFormat, ScalePrior,
     Shape, Similarity, TableMode, Tracker,
 };
 use rand_xoshiro::Xoshiro128PlusPlus;
+#[cfg(feature = "stm32f405")]
+use stm32f4xx_hal as _;
 
 /// One of the configurations, by `pick`.
 fn config(pick: u8) -> Config {
