@@ -6,8 +6,11 @@ use std::path::PathBuf;
 fn main() {
     let out = PathBuf::from(std::env::var_os("OUT_DIR").expect("cargo sets OUT_DIR"));
     let dir = PathBuf::from(std::env::var_os("CARGO_MANIFEST_DIR").expect("cargo sets it"));
-    let memory = if std::env::var_os("CARGO_FEATURE_STM32F405").is_some() {
+    let feature = |f: &str| std::env::var_os(format!("CARGO_FEATURE_{f}")).is_some();
+    let memory = if feature("STM32F405") {
         dir.join("boards/stm32f405/memory.x")
+    } else if feature("RP2040") {
+        dir.join("boards/rp2040/memory.x")
     } else {
         dir.join("../memory.x")
     };

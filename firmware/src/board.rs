@@ -2,11 +2,15 @@
 //! buffer that fits, the start-up, and the pan-tilt example's servos and
 //! LED. The default is QEMU's `mps2-an386` (an FPGA image with 4 MiB of
 //! SRAM); the `stm32f405` feature builds for the STM32F405RG, QEMU's
-//! `netduinoplus2` (the chip's memory map in `boards/stm32f405/memory.x`).
+//! `netduinoplus2` (the chip's memory map in `boards/stm32f405/memory.x`),
+//! and the `rp2040` feature for the RP2040 (built and audited; QEMU has no
+//! model of it).
 //! `.cargo/qemu-run` picks the QEMU board from where the ELF starts.
 
-#[cfg(not(feature = "stm32f405"))]
+#[cfg(not(any(feature = "stm32f405", feature = "rp2040")))]
 pub use mps2::*;
+#[cfg(feature = "rp2040")]
+pub use rp2040::*;
 #[cfg(feature = "stm32f405")]
 pub use stm32f405::*;
 
@@ -22,7 +26,7 @@ pub trait LevelReadback {
     fn is_on(&self) -> bool;
 }
 
-#[cfg(not(feature = "stm32f405"))]
+#[cfg(not(any(feature = "stm32f405", feature = "rp2040")))]
 mod mps2 {
     use core::convert::Infallible;
     use embedded_hal::digital::{ErrorType as PinErrorType, OutputPin};
@@ -192,5 +196,44 @@ mod stm32f405 {
         pan.enable();
         tilt.enable();
         Some((pan, tilt, Led { pin: gpioa.pa5.into_push_pull_output(), on: false }))
+    }
+}
+
+#[cfg(feature = "rp2040")]
+mod rp2040 {
+    use rp2040_hal::{Watchdog, clocks::init_clocks_and_plls, pac};
+
+    /// The board's name in the firmware's report.
+    pub const NAME: &str = "RP2040 (264 KiB of SRAM), 125 MHz from a 12 MHz crystal";
+    /// The largest frame held: QVGA RGB565, as on the emulated board
+    /// (153,600 B; the RP2040's SRAM has room for it).
+    pub const FRAME_BYTES: usize = 320 * 240 * 2;
+    /// SysTick here runs at the core clock, one tick per cycle, not per
+    /// instruction: no instruction count.
+    pub const INSTRUCTIONS_PER_TICK: Option<u32> = None;
+    /// A Raspberry Pi Pico's crystal.
+    const XTAL_HZ: u32 = 12_000_000;
+
+    /// The second-stage boot loader, for the W25Q080 flash of a Pico.
+    #[unsafe(link_section = ".boot2")]
+    #[used]
+    pub static BOOT2: [u8; 256] = rp2040_boot2::BOOT_LOADER_W25Q080;
+
+    /// The clocks: the system PLL at 125 MHz from the crystal (the HAL's
+    /// standard set-up; it waits for the crystal and the PLLs to lock,
+    /// which on the chip takes about a millisecond).
+    pub fn init() {
+        if let Some(mut dp) = pac::Peripherals::take() {
+            let mut watchdog = Watchdog::new(dp.WATCHDOG);
+            let _ = init_clocks_and_plls(
+                XTAL_HZ,
+                dp.XOSC,
+                dp.CLOCKS,
+                dp.PLL_SYS,
+                dp.PLL_USB,
+                &mut dp.RESETS,
+                &mut watchdog,
+            );
+        }
     }
 }

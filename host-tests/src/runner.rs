@@ -64,14 +64,14 @@ pub struct Run {
 
 /// A tracker of any [`Method`], stepped one frame at a time: what every
 /// command drives, whether its frames sit in memory or stream past.
-pub enum Session {
+pub enum AnyTracker {
     /// The particle filter.
     Pf(Box<HostTracker>),
     /// Mean shift, plain or Kalman-predicted, with its similarity threshold.
     MeanShift(Box<MeanShift>, f32),
 }
 
-impl Session {
+impl AnyTracker {
     /// A tracker of `method` (`config` and `seed` apply to the particle
     /// filter), initialised on `first` with `init`; returns it and the
     /// initialisation's estimate.
@@ -85,13 +85,13 @@ impl Session {
         let ms = |c: MeanShiftConfig| -> Result<(Self, Estimate), pftrack::Error> {
             let mut t: Box<MeanShift> = Box::new(MeanShift::new(c)?);
             let est = t.init(first, init)?;
-            Ok((Session::MeanShift(t, c.min_similarity), est))
+            Ok((AnyTracker::MeanShift(t, c.min_similarity), est))
         };
         match method {
             Method::Pf => {
                 let mut t = Box::new(HostTracker::new(config, seed)?);
                 let est = t.init(first, init)?;
-                Ok((Session::Pf(t), est))
+                Ok((AnyTracker::Pf(t), est))
             }
             Method::Meanshift => ms(MeanShiftConfig::default()),
             Method::Kalman => ms(MeanShiftConfig::kalman()),
@@ -101,8 +101,8 @@ impl Session {
     /// Tracks one more frame.
     pub fn step(&mut self, frame: &Frame<'_>) -> Result<Estimate, pftrack::Error> {
         match self {
-            Session::Pf(t) => t.step(frame),
-            Session::MeanShift(t, _) => t.step(frame),
+            AnyTracker::Pf(t) => t.step(frame),
+            AnyTracker::MeanShift(t, _) => t.step(frame),
         }
     }
 
@@ -110,60 +110,60 @@ impl Session {
     /// filter, configured for mean shift.
     pub fn threshold(&self) -> f32 {
         match self {
-            Session::Pf(t) => t.appearance_threshold().unwrap_or(0.0),
-            Session::MeanShift(_, min) => *min,
+            AnyTracker::Pf(t) => t.appearance_threshold().unwrap_or(0.0),
+            AnyTracker::MeanShift(_, min) => *min,
         }
     }
 
     /// Every 4th particle's centre (none for mean shift), for pictures.
     pub fn particles(&self) -> Vec<(f32, f32)> {
         match self {
-            Session::Pf(t) => t.particles().iter().step_by(4).map(|p| (p.x, p.y)).collect(),
-            Session::MeanShift(..) => Vec::new(),
+            AnyTracker::Pf(t) => t.particles().iter().step_by(4).map(|p| (p.x, p.y)).collect(),
+            AnyTracker::MeanShift(..) => Vec::new(),
         }
     }
 
     /// The particle filter's diagnostics of the last step.
     pub fn diagnostics(&self) -> Option<pftrack::Diagnostics> {
         match self {
-            Session::Pf(t) => Some(t.diagnostics()),
-            Session::MeanShift(..) => None,
+            AnyTracker::Pf(t) => Some(t.diagnostics()),
+            AnyTracker::MeanShift(..) => None,
         }
     }
 
     /// The colour levels chosen at initialisation (particle filter only).
     pub fn colour_levels(&self) -> Option<[u8; 4]> {
         match self {
-            Session::Pf(t) => t.colour_levels(),
-            Session::MeanShift(..) => None,
+            AnyTracker::Pf(t) => t.colour_levels(),
+            AnyTracker::MeanShift(..) => None,
         }
     }
 }
 
 impl Run {
     /// An empty run that starts from `init`.
-    pub fn new(init: BoundingBox, session: &Session) -> Self {
+    pub fn new(init: BoundingBox, tracker: &AnyTracker) -> Self {
         Run {
             boxes: vec![init],
             estimates: Vec::new(),
             step_ms: Vec::new(),
-            threshold: session.threshold(),
-            colour_levels: session.colour_levels(),
+            threshold: tracker.threshold(),
+            colour_levels: tracker.colour_levels(),
             particles: Vec::new(),
             diagnostics: Vec::new(),
         }
     }
 
-    /// Steps `session` on `frame` and records the estimate, the step's time
+    /// Steps `tracker` on `frame` and records the estimate, the step's time
     /// (collecting particles for pictures is not counted) and the rest.
-    pub fn step(&mut self, session: &mut Session, frame: &Frame<'_>) -> Result<Estimate, pftrack::Error> {
+    pub fn step(&mut self, tracker: &mut AnyTracker, frame: &Frame<'_>) -> Result<Estimate, pftrack::Error> {
         let t0 = Instant::now();
-        let est = session.step(frame)?;
+        let est = tracker.step(frame)?;
         self.step_ms.push(ms_since(t0));
         self.boxes.push(est.bbox());
         self.estimates.push(est);
-        self.particles.push(session.particles());
-        self.diagnostics.extend(session.diagnostics());
+        self.particles.push(tracker.particles());
+        self.diagnostics.extend(tracker.diagnostics());
         Ok(est)
     }
 }
@@ -180,10 +180,10 @@ pub fn track_with<'a>(
     mut progress: impl FnMut(usize, usize),
 ) -> Result<Run, pftrack::Error> {
     let first = frames.first().ok_or(pftrack::Error::NotInitialised)?;
-    let (mut session, _) = Session::start(method, config, seed, first, init)?;
-    let mut run = Run::new(init, &session);
+    let (mut tracker, _) = AnyTracker::start(method, config, seed, first, init)?;
+    let mut run = Run::new(init, &tracker);
     for (i, f) in frames.iter().enumerate().skip(1) {
-        run.step(&mut session, f)?;
+        run.step(&mut tracker, f)?;
         progress(i + 1, frames.len());
     }
     Ok(run)

@@ -20,6 +20,9 @@
 #![no_std]
 #![no_main]
 
+#[cfg(feature = "rp2040")]
+compile_error!("the pan-tilt example has no RP2040 servos: build the RP2040 firmware with --bin pftrack-firmware");
+
 // Shared with the main firmware, which uses the rest of it.
 #[allow(dead_code)]
 #[path = "../board.rs"]

@@ -14,13 +14,15 @@
 #![no_main]
 
 use cortex_m_rt::entry;
-// The STM32F405 build's device crate provides the interrupt vectors its
+// The board builds' device crates provide the interrupt vectors their
 // cortex-m-rt expects.
 use pftrack::{
     Binning, BoundaryCue, BoundingBox, Config, Frame, MeanShift, MeanShiftConfig, ModelUpdate, PixelFormat, ScalePrior,
     Shape, Similarity, TableMode, Tracker,
 };
 use rand_xoshiro::Xoshiro128PlusPlus;
+#[cfg(feature = "rp2040")]
+use rp2040_hal as _;
 #[cfg(feature = "stm32f405")]
 use stm32f4xx_hal as _;
 

@@ -5,7 +5,7 @@ use clap::{Parser, Subcommand};
 use host_tests::fixture::Fixture;
 use host_tests::metrics::{Awareness, has_target, median, score};
 use host_tests::otb;
-use host_tests::runner::{Method, PARTICLES, Run, Session, track_with};
+use host_tests::runner::{AnyTracker, Method, PARTICLES, Run, track_with};
 use host_tests::source::{FixtureStream, FrameSource, RawSpec, fixture_truth};
 use indicatif::{ProgressBar, ProgressStyle};
 use pftrack::{BoundingBox, Config, Estimate, Event, Frame, PixelFormat, TrackState};
@@ -442,14 +442,14 @@ fn run_one(path: &Path, common: &Common) -> Result<(Row, Vec<BoundingBox>, Vec<B
         };
     let first = frames.next_frame().map_err(|e| format!("{name}: {e}"))?.ok_or_else(|| format!("{name}: no frames"))?;
     let init = start_box(&name, &truth)?;
-    let (mut session, _) =
-        Session::start(common.tracker, common.config, common.seed, &first, init).map_err(|e| format!("{name}: {e}"))?;
+    let (mut tracker, _) = AnyTracker::start(common.tracker, common.config, common.seed, &first, init)
+        .map_err(|e| format!("{name}: {e}"))?;
     picture(0, &first, None, truth.first(), &[]);
-    let mut run = Run::new(init, &session);
+    let mut run = Run::new(init, &tracker);
     let mut i = 1;
     while let Some(f) = frames.next_frame().map_err(|e| format!("{name}: {e}"))? {
-        let est = run.step(&mut session, &f).map_err(|e| format!("{name}: frame {}: {e}", i + 1))?;
-        picture(i, &f, Some(&est), truth.get(i), &session.particles());
+        let est = run.step(&mut tracker, &f).map_err(|e| format!("{name}: frame {}: {e}", i + 1))?;
+        picture(i, &f, Some(&est), truth.get(i), &tracker.particles());
         i += 1;
         pb.set_position(i as u64);
     }
@@ -1125,30 +1125,30 @@ fn run_command(a: &RunArgs) -> Result<(), String> {
     let mut boxes = Vec::new();
     let t0 = std::time::Instant::now();
     let first = src.next_frame()?.ok_or_else(|| format!("{}: no frames", a.input))?;
-    let (mut session, est0) =
-        Session::start(a.tracker, config, a.seed, &first, init).map_err(|e| format!("frame 1: {e}"))?;
+    let (mut tracker, est0) =
+        AnyTracker::start(a.tracker, config, a.seed, &first, init).map_err(|e| format!("frame 1: {e}"))?;
     write(&Record::initial(init))?;
     if truth.is_some() {
         boxes.push(init);
     }
     if let Some(v) = &mut video {
-        v.write(&first, Some(&est0), &session.particles())?;
+        v.write(&first, Some(&est0), &tracker.particles())?;
     }
-    keep(0, &first, &est0, &session.particles());
+    keep(0, &first, &est0, &tracker.particles());
     let (mut frames, mut lost, mut found, mut tracking) = (1usize, 0usize, 0usize, 1usize);
     while !closed.get()
         && let Some(f) = src.next_frame()?
     {
         frames += 1;
-        let est = session.step(&f).map_err(|e| format!("frame {frames}: {e}"))?;
+        let est = tracker.step(&f).map_err(|e| format!("frame {frames}: {e}"))?;
         write(&Record::of(frames, &est))?;
         if truth.is_some() {
             boxes.push(est.bbox());
         }
         if let Some(v) = &mut video {
-            v.write(&f, Some(&est), &session.particles())?;
+            v.write(&f, Some(&est), &tracker.particles())?;
         }
-        keep(frames - 1, &f, &est, &session.particles());
+        keep(frames - 1, &f, &est, &tracker.particles());
         lost += usize::from(est.event == Some(Event::LostTarget));
         found += usize::from(est.event == Some(Event::Reacquired));
         tracking += usize::from(est.state == TrackState::Tracking);
