@@ -168,22 +168,37 @@ pub fn sqrt_q4(x: u32) -> u32 {
     if x < (1 << 24) { isqrt(x << 8) } else { isqrt(x) << 4 }
 }
 
-/// `⌊sqrt(x)⌋`, exactly, with one division: a first guess from a table on
-/// the top bits of `x`, one integer Newton step and a correction.
+/// `⌊sqrt(x)⌋`, exactly: a first guess from a table on the top bits of
+/// `x`, one integer Newton step and a correction, by whichever of
+/// [`isqrt_by_division`] and [`isqrt_by_reciprocal`] suits the core.
 ///
 /// `core`'s `u32::isqrt` took about 64 instructions per call on the
 /// Cortex-M4F (two divisions and a long normalisation), and the
 /// Bhattacharyya sum takes one root per non-empty bin of every particle.
-/// Why it is exact: an integer Newton step `⌊(y + ⌊x / y⌋) / 2⌋` from any
-/// `y >= 1` is `>= ⌊sqrt(x)⌋` (it is the floor of `(y + x / y) / 2 >=
-/// sqrt(x)`), so stepping down while `y² > x` ends on the root; from the
-/// table's guess (within 0.4% of the root) the step lands at most a couple
-/// of units above it. Tested against `u32::isqrt` on every `x < 2^26`, and
-/// around every square up to `2^32`.
-#[inline]
+/// The Newton step `y + (x − y²)/(2y)` divides: one instruction on a core
+/// with a divider (Cortex-M3 and up), a library call of about 40 on one
+/// without (Cortex-M0+, ARM11), where it was a fifth of the ARM1136's
+/// instructions per frame. Both are exact, so the choice changes no
+/// result: tested against `u32::isqrt` on every `x < 2^26`, around every
+/// square up to `2^32`, and (ignored by default) on every `u32`.
+#[inline(always)]
 pub fn isqrt(x: u32) -> u32 {
-    // x >> k in 64..256 (or x itself below 64), k even, so that
-    // sqrt(x) = sqrt(x >> k) · 2^(k/2) up to the bits shifted out.
+    if HARDWARE_DIVIDE { isqrt_by_division(x) } else { isqrt_by_reciprocal(x) }
+}
+
+/// Whether the target divides in hardware: every host, and the hard-float
+/// Cortex-M targets (ARMv7E-M: Cortex-M4F and M7). The other ARM targets
+/// this crate is built for (Cortex-M0+, ARMv6 Linux) have no divider; an
+/// ARM target wrongly counted among them still computes the same results,
+/// a little slower.
+pub(crate) const HARDWARE_DIVIDE: bool = !cfg!(target_arch = "arm") || cfg!(target_abi = "eabihf");
+
+/// [`isqrt`] with one division: the table's guess (within 0.4% of the
+/// root), one integer Newton step `⌊(y + ⌊x / y⌋) / 2⌋`, which is
+/// `>= ⌊sqrt(x)⌋` from any `y >= 1` and lands at most a couple of units
+/// above it, and stepping down while `y² > x`.
+#[inline]
+pub fn isqrt_by_division(x: u32) -> u32 {
     let top_bit = 31u32.saturating_sub(x.leading_zeros());
     let k = top_bit.saturating_sub(6) & !1;
     let t = (x >> k) as u8;
@@ -199,9 +214,48 @@ pub fn isqrt(x: u32) -> u32 {
     y
 }
 
+/// [`isqrt`] with no division: the Newton step's division by `2y` is a
+/// multiplication by a tabled reciprocal. Why it is exact: whatever the
+/// step lands on, stepping down while `y² > x` and up while `(y + 1)² <= x`
+/// ends on the root; from the table's guess the step lands within a couple
+/// of units of it.
+#[inline]
+pub fn isqrt_by_reciprocal(x: u32) -> u32 {
+    // x >> k in 64..256 (or x itself below 64), k even, so that
+    // sqrt(x) = sqrt(x >> k) · 2^h, h = k / 2, up to the bits shifted out.
+    let top_bit = 31u32.saturating_sub(x.leading_zeros());
+    let k = top_bit.saturating_sub(6) & !1;
+    let h = k / 2;
+    let t = (x >> k) as u8 as usize;
+    // g = 16·sqrt(t + 1/2) (at least 11), r = 2^16 / g.
+    let g = ROOT_GUESS.get(t).copied().unwrap_or(u8::MAX) as u32;
+    let r = ROOT_RECIPROCAL.get(t).copied().unwrap_or(1) as i32;
+    // y ≈ g · 2^h / 16, at most 65,280 (g <= 255, h <= 12): y² fits in
+    // 32 bits, and so does x − y² as a signed number (within 1% of x;
+    // negative when y is above the root).
+    let y = ((g << h) + 8) >> 4;
+    let d = x.wrapping_sub(y * y) as i32;
+    // (x − y²) / (2y) with 1 / (2y) = 8 / (g · 2^h) = r · 2^-13 · 2^-h:
+    // d is shifted first, so that the product fits in 32 bits (|d >> h|
+    // < 2^(h+2) and r < 2^13); the bits lost move the step by under one.
+    let step = ((d >> h) * r) >> 13;
+    let mut y = (y as i32 + step).max(0) as u32;
+    while y > 0xffff || y * y > x {
+        y -= 1;
+    }
+    while y < 0xffff && (y + 1) * (y + 1) <= x {
+        y += 1;
+    }
+    y
+}
+
 /// `16 · sqrt(t + 1/2)`, rounded, for `t` in `0..256` (the last capped at
 /// 255): [`isqrt`]'s first guesses.
 static ROOT_GUESS: [u8; 256] = root_guesses();
+
+/// `2^16 / g`, rounded, for each guess `g` of [`ROOT_GUESS`]: [`isqrt`]'s
+/// Newton step divides by multiplying.
+static ROOT_RECIPROCAL: [u16; 256] = root_reciprocals();
 
 // Indices below 256 in a 256-entry array; `get` is not available in const fns.
 #[allow(clippy::indexing_slicing)]
@@ -223,6 +277,20 @@ const fn root_guesses() -> [u8; 256] {
         t += 1;
     }
     g
+}
+
+// As above; the guesses are at least 11, so the division is by no zero.
+#[allow(clippy::indexing_slicing)]
+const fn root_reciprocals() -> [u16; 256] {
+    let g = root_guesses();
+    let mut r = [0u16; 256];
+    let mut t = 0;
+    while t < 256 {
+        let v = g[t] as u32;
+        r[t] = ((65_536 + v / 2) / v) as u16;
+        t += 1;
+    }
+    r
 }
 
 #[cfg(test)]
@@ -317,23 +385,26 @@ mod tests {
         // 2^26 (2^22 in unoptimised builds, to keep them fast), then for
         // every root r the values where the answer changes: r² − 1, r², r² + 1.
         let limit = if cfg!(debug_assertions) { 1u32 << 22 } else { 1 << 26 };
-        for x in 0..limit {
-            assert_eq!(isqrt(x), x.isqrt(), "x = {x}");
-        }
-        for r in 0..=u16::MAX as u32 {
-            let sq = r * r;
-            for x in [sq.wrapping_sub(1), sq, sq + 1, sq + r, sq + 2 * r] {
-                assert_eq!(isqrt(x), x.isqrt(), "x = {x}");
+        for f in [isqrt_by_division, isqrt_by_reciprocal] {
+            for x in 0..limit {
+                assert_eq!(f(x), x.isqrt(), "x = {x}");
             }
+            for r in 0..=u16::MAX as u32 {
+                let sq = r * r;
+                for x in [sq.wrapping_sub(1), sq, sq + 1, sq + r, sq + 2 * r] {
+                    assert_eq!(f(x), x.isqrt(), "x = {x}");
+                }
+            }
+            assert_eq!(f(u32::MAX), 65_535);
         }
-        assert_eq!(isqrt(u32::MAX), 65_535);
     }
 
     #[test]
     #[ignore = "every u32: about a minute; run with --ignored after changing isqrt"]
     fn isqrt_is_the_exact_root_everywhere() {
         for x in 0..=u32::MAX {
-            assert_eq!(isqrt(x), x.isqrt(), "x = {x}");
+            assert_eq!(isqrt_by_division(x), x.isqrt(), "x = {x}");
+            assert_eq!(isqrt_by_reciprocal(x), x.isqrt(), "x = {x}");
         }
     }
 
