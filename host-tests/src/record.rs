@@ -37,17 +37,12 @@ impl Record {
     /// written exactly (the shortest decimal that reads back as the same
     /// `f32`).
     pub fn json(&self) -> String {
-        let b = self.bbox;
         let event = self.event.map_or_else(|| "null".to_string(), |e| format!("\"{}\"", event_name(e)));
+        let [confidence, x, y, w, h] = self.numbers();
         format!(
-            "{{\"frame\":{},\"state\":\"{}\",\"event\":{event},\"confidence\":{},\"box\":[{},{},{},{}]}}",
+            "{{\"frame\":{},\"state\":\"{}\",\"event\":{event},\"confidence\":{confidence},\"box\":[{x},{y},{w},{h}]}}",
             self.frame,
             state_name(self.state),
-            number(self.confidence),
-            number(b.x),
-            number(b.y),
-            number(b.width),
-            number(b.height)
         )
     }
 
@@ -56,17 +51,14 @@ impl Record {
 
     /// The CSV row, without its newline.
     pub fn csv(&self) -> String {
+        let [confidence, x, y, w, h] = self.numbers();
+        format!("{},{},{confidence},{x},{y},{w},{h}", self.frame, state_name(self.state))
+    }
+
+    /// The confidence and the box as the records write them.
+    fn numbers(&self) -> [String; 5] {
         let b = self.bbox;
-        format!(
-            "{},{},{},{},{},{},{}",
-            self.frame,
-            state_name(self.state),
-            number(self.confidence),
-            number(b.x),
-            number(b.y),
-            number(b.width),
-            number(b.height)
-        )
+        [self.confidence, b.x, b.y, b.width, b.height].map(number)
     }
 }
 
