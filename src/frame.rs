@@ -122,25 +122,26 @@ impl<'a> Plane<'a> {
     }
 
     /// Checks that `rows` rows of `row_bytes` fit (the last row needs no
-    /// padding), with the errors `stride_err` and `size_err` build.
-    fn check(
-        &self,
-        rows: usize,
-        row_bytes: usize,
-        stride_err: impl Fn(usize, usize) -> FrameError,
-        size_err: impl Fn(usize, usize) -> FrameError,
-    ) -> Result<(), FrameError> {
-        if self.stride < row_bytes {
-            return Err(stride_err(self.stride, row_bytes));
+    /// padding); the errors name `chroma`, or are the luma plane's (or a
+    /// packed frame's) with `None`.
+    fn check(&self, rows: usize, row_bytes: usize, chroma: Option<ChromaPlane>) -> Result<(), FrameError> {
+        let (stride, got) = (self.stride, self.data.len());
+        if stride < row_bytes {
+            return Err(match chroma {
+                None => FrameError::StrideTooSmall { stride, row_bytes },
+                Some(plane) => FrameError::ChromaStrideTooSmall { plane, stride, row_bytes },
+            });
         }
-        let got = self.data.len();
-        let needed = self
-            .stride
+        let too_small = |needed| match chroma {
+            None => FrameError::BufferTooSmall { needed, got },
+            Some(plane) => FrameError::ChromaTooSmall { plane, needed, got },
+        };
+        let needed = stride
             .checked_mul(rows.saturating_sub(1))
             .and_then(|b| b.checked_add(row_bytes))
-            .ok_or(size_err(usize::MAX, got))?;
+            .ok_or(too_small(usize::MAX))?;
         if got < needed {
-            return Err(size_err(needed, got));
+            return Err(too_small(needed));
         }
         Ok(())
     }
@@ -217,14 +218,16 @@ impl<'a> Frame<'a> {
         check_size(width, height, format)?;
         let row_bytes = width * format.bytes_per_pixel();
         if !format.is_planar() {
-            Plane::new(data, stride).check(height, row_bytes, stride_too_small, buffer_too_small)?;
+            Plane::new(data, stride).check(height, row_bytes, None)?;
             return Ok(Frame { data, width, height, stride, format, chroma: NO_CHROMA });
         }
         // The luma plane's rows are all padded: the chroma follows it.
-        let luma_len = stride.checked_mul(height).ok_or(buffer_too_small(usize::MAX, data.len()))?;
+        let luma_len =
+            stride.checked_mul(height).ok_or(FrameError::BufferTooSmall { needed: usize::MAX, got: data.len() })?;
         let (y, rest) = (data.get(..luma_len).unwrap_or(data), data.get(luma_len..).unwrap_or(&[]));
         let luma = Plane::new(y, stride);
         if format == PixelFormat::I420 {
+            // No overflow: cs · (height / 2) is under stride · height.
             let cs = stride / 2;
             let (u, v) = rest.split_at_checked(cs * (height / 2)).unwrap_or((rest, &[]));
             Self::i420(luma, Plane::new(u, cs), Plane::new(v, cs), width, height)
@@ -239,10 +242,9 @@ impl<'a> Frame<'a> {
     pub fn i420(y: Plane<'a>, u: Plane<'a>, v: Plane<'a>, width: usize, height: usize) -> Result<Self, FrameError> {
         let format = PixelFormat::I420;
         check_size(width, height, format)?;
-        y.check(height, width, stride_too_small, buffer_too_small)?;
-        for (plane, p) in [(ChromaPlane::U, u), (ChromaPlane::V, v)] {
-            p.check(height / 2, width / 2, chroma_stride(plane), chroma_size(plane))?;
-        }
+        y.check(height, width, None)?;
+        u.check(height / 2, width / 2, Some(ChromaPlane::U))?;
+        v.check(height / 2, width / 2, Some(ChromaPlane::V))?;
         Ok(Frame { data: y.data, width, height, stride: y.stride, format, chroma: [u, v] })
     }
 
@@ -252,8 +254,8 @@ impl<'a> Frame<'a> {
     pub fn nv12(y: Plane<'a>, uv: Plane<'a>, width: usize, height: usize) -> Result<Self, FrameError> {
         let format = PixelFormat::Nv12;
         check_size(width, height, format)?;
-        y.check(height, width, stride_too_small, buffer_too_small)?;
-        uv.check(height / 2, width, chroma_stride(ChromaPlane::Uv), chroma_size(ChromaPlane::Uv))?;
+        y.check(height, width, None)?;
+        uv.check(height / 2, width, Some(ChromaPlane::Uv))?;
         Ok(Frame { data: y.data, width, height, stride: y.stride, format, chroma: [uv, uv] })
     }
 
@@ -358,22 +360,6 @@ fn check_size(width: usize, height: usize, format: PixelFormat) -> Result<(), Fr
         return Err(FrameError::OddChromaSize { width, height });
     }
     Ok(())
-}
-
-fn stride_too_small(stride: usize, row_bytes: usize) -> FrameError {
-    FrameError::StrideTooSmall { stride, row_bytes }
-}
-
-fn buffer_too_small(needed: usize, got: usize) -> FrameError {
-    FrameError::BufferTooSmall { needed, got }
-}
-
-fn chroma_stride(plane: ChromaPlane) -> impl Fn(usize, usize) -> FrameError {
-    move |stride, row_bytes| FrameError::ChromaStrideTooSmall { plane, stride, row_bytes }
-}
-
-fn chroma_size(plane: ChromaPlane) -> impl Fn(usize, usize) -> FrameError {
-    move |needed, got| FrameError::ChromaTooSmall { plane, needed, got }
 }
 
 impl Frame<'_> {

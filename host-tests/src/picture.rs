@@ -111,6 +111,74 @@ pub fn annotate(canvas: &mut Canvas, est: Option<&Estimate>, truth: Option<&Boun
     }
 }
 
+/// The frames of an annotated GIF, at most [`GifFrames::MAX`] however long
+/// the input: every `every`-th frame, evenly spaced when the length is known;
+/// otherwise, when the list overflows, every other frame is dropped and
+/// `every` doubles. Small frames are enlarged so the overlay stays legible.
+pub struct GifFrames {
+    canvases: Vec<Canvas>,
+    every: usize,
+    scale: usize,
+}
+
+impl GifFrames {
+    /// The most frames a GIF keeps.
+    pub const MAX: usize = 300;
+
+    /// For frames `width` pixels wide, `len` of them if known.
+    pub fn new(width: usize, len: Option<usize>) -> Self {
+        let every = len.map_or(1, |n| n.div_ceil(Self::MAX).max(1));
+        GifFrames { canvases: Vec::new(), every, scale: (480 / width.max(1)).clamp(1, 4) }
+    }
+
+    /// Whether frame `i` (from 0) goes into the GIF: callers skip drawing
+    /// what would be dropped.
+    pub fn wants(&self, i: usize) -> bool {
+        i.is_multiple_of(self.every)
+    }
+
+    /// Frames between two kept ones.
+    pub fn every(&self) -> usize {
+        self.every
+    }
+
+    /// Adds frame `i` (from 0), `rgb` its pixels, with its overlay, if it is
+    /// one to keep.
+    pub fn push(
+        &mut self,
+        i: usize,
+        (width, height, rgb): (usize, usize, Vec<u8>),
+        est: Option<&Estimate>,
+        truth: Option<&BoundingBox>,
+        particles: &[(f32, f32)],
+    ) {
+        if !self.wants(i) {
+            return;
+        }
+        let mut c = Canvas::new(width, height, rgb);
+        annotate(&mut c, est, truth, particles);
+        self.canvases.push(c.scaled(self.scale));
+        if self.canvases.len() > Self::MAX {
+            let mut n = 0;
+            self.canvases.retain(|_| {
+                n += 1;
+                n % 2 == 1
+            });
+            self.every *= 2;
+        }
+    }
+
+    /// Writes the GIF, frames `delay_ms` apart, and with `still` its middle
+    /// frame as a PNG.
+    pub fn write(&self, gif: &Path, still: Option<&Path>, delay_ms: u32) -> Result<(), String> {
+        write_gif(gif, &self.canvases, delay_ms)?;
+        match (still, self.canvases.get(self.canvases.len() / 2)) {
+            (Some(path), Some(mid)) => write_png(path, mid),
+            _ => Ok(()),
+        }
+    }
+}
+
 /// Writes frames as an animated GIF, `delay_ms` apart.
 pub fn write_gif(path: &Path, frames: &[Canvas], delay_ms: u32) -> Result<(), String> {
     use image::codecs::gif::{GifEncoder, Repeat};

@@ -397,9 +397,7 @@ impl FixtureStream {
     /// Reads and checks the fixture's header.
     pub fn new(reader: Box<dyn Read>) -> Result<Self, String> {
         let mut reader = BufReader::new(reader);
-        let mut head = [0u8; HEADER_LEN];
-        let got = fill(&mut reader, &mut head)?;
-        let header = Header::parse(head.get(..got).unwrap_or_default()).map_err(|e| e.to_string())?;
+        let header = read_header(&mut reader)?;
         Ok(FixtureStream { reader, header, buf: vec![0; header.record_len()], read: 0 })
     }
 }
@@ -430,6 +428,13 @@ impl FrameSource for FixtureStream {
     }
 }
 
+/// Reads and checks a fixture's header from the start of `r`.
+fn read_header(r: &mut impl Read) -> Result<Header, String> {
+    let mut head = [0u8; HEADER_LEN];
+    let got = fill(r, &mut head)?;
+    Header::parse(head.get(..got).unwrap_or_default()).map_err(|e| e.to_string())
+}
+
 /// The ground truth of every frame of the fixture at `path`, read by
 /// skipping from record to record over the pixels. Frames where the target
 /// is entirely hidden or gone get an empty box: they are not scored.
@@ -437,9 +442,7 @@ pub fn fixture_truth(path: &Path) -> Result<Vec<BoundingBox>, String> {
     use std::io::{Seek, SeekFrom};
     let err = |e: String| format!("{}: {e}", path.display());
     let mut file = BufReader::new(std::fs::File::open(path).map_err(|e| err(e.to_string()))?);
-    let mut head = [0u8; HEADER_LEN];
-    let got = fill(&mut file, &mut head).map_err(err)?;
-    let header = Header::parse(head.get(..got).unwrap_or_default()).map_err(|e| err(e.to_string()))?;
+    let header = read_header(&mut file).map_err(err)?;
     let mut truth = Vec::with_capacity(header.frames as usize);
     let mut meta = [0u8; RECORD_META_LEN];
     for i in 0..header.frames {

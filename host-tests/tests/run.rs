@@ -108,11 +108,7 @@ fn the_same_pixels_give_the_same_track_whichever_way_they_arrive() {
     let name = "distractor";
     let fx = Fixture::load(Path::new(&fixture(name))).unwrap();
     let pngs = dir.join("pngs");
-    std::fs::create_dir_all(&pngs).unwrap();
-    for (i, f) in fx.frames.iter().enumerate() {
-        let img = image::RgbImage::from_raw(fx.width as u32, fx.height as u32, f.pixels.clone()).unwrap();
-        img.save(pngs.join(format!("{:04}.png", i + 1))).unwrap();
-    }
+    write_pngs(&fx, &pngs, fx.frames.len());
     let b = first_box(name);
     let (ok, direct, err) = track(&["run", &fixture(name), "--box", &b]);
     assert!(ok, "{err}");
@@ -184,6 +180,17 @@ fn bad_input_stops_with_one_line_naming_the_frame_after_writing_the_frames_befor
     std::fs::remove_dir_all(dir).ok();
 }
 
+/// The first `n` frames of an RGB888 fixture, looped, as PNG files in `dir`
+/// (PNG is lossless: the pixels are the fixture's).
+fn write_pngs(fx: &Fixture, dir: &Path, n: usize) {
+    std::fs::create_dir_all(dir).unwrap();
+    for i in 0..n {
+        let f = &fx.frames[i % fx.frames.len()];
+        let img = image::RgbImage::from_raw(fx.width as u32, fx.height as u32, f.pixels.clone()).unwrap();
+        img.save(dir.join(format!("{:05}.png", i + 1))).unwrap();
+    }
+}
+
 /// The peak memory a run reported, in MB.
 fn peak_mb(text: &str) -> f64 {
     let at = text.find("peak memory ").unwrap_or_else(|| panic!("no peak memory in {text}"));
@@ -219,15 +226,9 @@ fn memory_does_not_grow_with_the_number_of_frames() {
     let mut peaks = Vec::new();
     for repeats in [1, 10] {
         let seq = dir.join(format!("seq{repeats}"));
-        std::fs::create_dir_all(seq.join("img")).unwrap();
-        let mut truth = String::new();
-        for i in 0..repeats * fx.frames.len() {
-            let f = &fx.frames[i % fx.frames.len()];
-            let img = image::RgbImage::from_raw(fx.width as u32, fx.height as u32, f.pixels.clone()).unwrap();
-            img.save(seq.join(format!("img/{:05}.png", i + 1))).unwrap();
-            let t = fx.frames[0].truth;
-            truth += &format!("{},{},{},{}\n", t.x, t.y, t.width, t.height);
-        }
+        write_pngs(&fx, &seq.join("img"), repeats * fx.frames.len());
+        let t = fx.frames[0].truth;
+        let truth = format!("{},{},{},{}\n", t.x, t.y, t.width, t.height).repeat(repeats * fx.frames.len());
         std::fs::write(seq.join("groundtruth.txt"), truth).unwrap();
         let (ok, out, err) = track(&["otb", seq.to_str().unwrap(), "--out-dir", dir.to_str().unwrap()]);
         assert!(ok, "{err}");

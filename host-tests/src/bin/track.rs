@@ -422,34 +422,28 @@ fn open_sequence(path: &Path) -> Result<Opened, String> {
 /// Tracks one sequence as it streams past, one frame in memory at a time,
 /// writes its track (and with `--gif` its pictures), and scores it.
 fn run_one(path: &Path, common: &Common) -> Result<(Row, Vec<BoundingBox>, Vec<BoundingBox>), String> {
-    use host_tests::picture::{Canvas, annotate, write_gif, write_png};
+    use host_tests::picture::GifFrames;
     let Opened { name, mut frames, truth } = open_sequence(path)?;
     let n = frames.frame_count().unwrap_or(0);
     let pb = bar(n, "track");
     pb.set_prefix(name.clone());
-    // At most 300 frames in the animation, evenly spaced; small frames are
-    // enlarged so the overlay stays legible.
-    let every = n.div_ceil(300).max(1);
-    let k = (480 / frames.size().0.max(1)).clamp(1, 4);
-    let mut canvases = Vec::new();
-    let mut picture =
-        |i: usize, f: &Frame<'_>, est: Option<&Estimate>, truth: Option<&BoundingBox>, parts: &[(f32, f32)]| {
-            if common.gif && i.is_multiple_of(every) {
-                let mut c = Canvas::new(f.width(), f.height(), host_tests::scene::to_rgb(f));
-                annotate(&mut c, est, truth.filter(|t| has_target(t)), parts);
-                canvases.push(c.scaled(k));
-            }
-        };
+    let mut gif = common.gif.then(|| GifFrames::new(frames.size().0, Some(n)));
+    let mut picture = |i: usize, f: &Frame<'_>, est: Option<&Estimate>, parts: &[(f32, f32)]| {
+        if let Some(g) = gif.as_mut().filter(|g| g.wants(i)) {
+            let px = (f.width(), f.height(), host_tests::scene::to_rgb(f));
+            g.push(i, px, est, truth.get(i).filter(|t| has_target(t)), parts);
+        }
+    };
     let first = frames.next_frame().map_err(|e| format!("{name}: {e}"))?.ok_or_else(|| format!("{name}: no frames"))?;
     let init = start_box(&name, &truth)?;
     let (mut tracker, _) = AnyTracker::start(common.tracker, common.config, common.seed, &first, init)
         .map_err(|e| format!("{name}: {e}"))?;
-    picture(0, &first, None, truth.first(), &[]);
+    picture(0, &first, None, &[]);
     let mut run = Run::new(init, &tracker);
     let mut i = 1;
     while let Some(f) = frames.next_frame().map_err(|e| format!("{name}: {e}"))? {
         let est = run.step(&mut tracker, &f).map_err(|e| format!("{name}: frame {}: {e}", i + 1))?;
-        picture(i, &f, Some(&est), truth.get(i), &tracker.particles());
+        picture(i, &f, Some(&est), run.particles.last().map_or(&[], Vec::as_slice));
         i += 1;
         pb.set_position(i as u64);
     }
@@ -458,11 +452,9 @@ fn run_one(path: &Path, common: &Common) -> Result<(Row, Vec<BoundingBox>, Vec<B
     if common.frames {
         print_frames(&truth, &run);
     }
-    if common.gif {
-        write_gif(&common.out_dir.join(format!("{name}.gif")), &canvases, 66)?;
-        if let Some(mid) = canvases.get(canvases.len() / 2) {
-            write_png(&common.out_dir.join(format!("{name}.png")), mid)?;
-        }
+    if let Some(g) = &gif {
+        let (animation, still) = (format!("{name}.gif"), format!("{name}.png"));
+        g.write(&common.out_dir.join(animation), Some(&common.out_dir.join(still)), 66)?;
     }
     if let Some(path) = &common.dump {
         use std::io::Write;
@@ -985,11 +977,7 @@ fn main() -> ExitCode {
         rows.iter().for_each(|r| pooled.merge(&r.aware));
         println!("{}", describe(&pooled));
     }
-    println!(
-        "tracks written to {}; peak memory {}",
-        common.out_dir.display(),
-        peak_memory().map_or_else(|| "unknown".to_string(), |b| format!("{:.1} MB", b as f64 / 1e6))
-    );
+    println!("tracks written to {}; peak memory {}", common.out_dir.display(), peak_memory());
     if common.plots && !scored.is_empty() {
         let ms = (!rows.is_empty()).then(|| rows.iter().map(|r| r.ms).sum::<f64>() / rows.len() as f64);
         let drawn = score_set(common.tracker.label(), &scored, ms)
@@ -1013,19 +1001,21 @@ fn create(path: &Path) -> Result<Box<dyn std::io::Write>, String> {
     Ok(Box::new(std::io::BufWriter::new(f)))
 }
 
-/// The peak resident memory of this process in bytes (Linux's VmHWM), if known.
-fn peak_memory() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
+/// The peak resident memory of this process (Linux's VmHWM) as the
+/// summaries print it, e.g. `5.2 MB`.
+fn peak_memory() -> String {
+    let kb = std::fs::read_to_string("/proc/self/status").ok().and_then(|status| {
+        let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+        line.split_whitespace().nth(1)?.parse::<u64>().ok()
+    });
+    kb.map_or_else(|| "unknown".to_string(), |kb| format!("{:.1} MB", (kb * 1024) as f64 / 1e6))
 }
 
 /// `track run`: one frame in memory at a time, every record written and
 /// flushed as its frame is done, so that an error or an endless stream
 /// leaves everything tracked so far on the output.
 fn run_command(a: &RunArgs) -> Result<(), String> {
-    use host_tests::picture::{Canvas, annotate, write_gif};
+    use host_tests::picture::GifFrames;
     use host_tests::record::{Record, Y4mWriter};
     use std::io::Write;
     let mut config = Config::default();
@@ -1086,26 +1076,7 @@ fn run_command(a: &RunArgs) -> Result<(), String> {
         )?),
         Some(p) => Some(Y4mWriter::new(create(Path::new(p))?, size, rate)?),
     };
-    // The GIF keeps at most 300 frames however long the input: every
-    // `every`-th frame, and when it is full every other one is dropped and
-    // `every` doubles.
-    let (mut gif, mut every) = (Vec::new(), 1usize);
-    let k = (480 / size.0.max(1)).clamp(1, 4);
-    let mut keep = |i: usize, f: &Frame<'_>, est: &Estimate, parts: &[(f32, f32)]| {
-        if a.gif.is_some() && i.is_multiple_of(every) {
-            let mut c = Canvas::new(f.width(), f.height(), host_tests::scene::to_rgb(f));
-            annotate(&mut c, Some(est), None, parts);
-            gif.push(c.scaled(k));
-            if gif.len() >= 300 {
-                let mut n = 0;
-                gif.retain(|_| {
-                    n += 1;
-                    n % 2 == 1
-                });
-                every *= 2;
-            }
-        }
-    };
+    let mut gif = a.gif.as_ref().map(|_| GifFrames::new(size.0, None));
     let pb = ProgressBar::new_spinner();
     pb.set_draw_target(indicatif::ProgressDrawTarget::stderr());
     pb.set_style(
@@ -1131,10 +1102,23 @@ fn run_command(a: &RunArgs) -> Result<(), String> {
     if truth.is_some() {
         boxes.push(init);
     }
-    if let Some(v) = &mut video {
-        v.write(&first, Some(&est0), &tracker.particles())?;
-    }
-    keep(0, &first, &est0, &tracker.particles());
+    // Every frame goes to the video, the GIF keeps some: particles and
+    // pixels are gathered only for what is drawn.
+    let mut draw = |i: usize, f: &Frame<'_>, est: &Estimate, tracker: &AnyTracker| -> Result<(), String> {
+        let kept = gif.as_ref().is_some_and(|g| g.wants(i));
+        if video.is_none() && !kept {
+            return Ok(());
+        }
+        let parts = tracker.particles();
+        if let Some(v) = &mut video {
+            v.write(f, Some(est), &parts)?;
+        }
+        if let Some(g) = gif.as_mut().filter(|_| kept) {
+            g.push(i, (f.width(), f.height(), host_tests::scene::to_rgb(f)), Some(est), None, &parts);
+        }
+        Ok(())
+    };
+    draw(0, &first, &est0, &tracker)?;
     let (mut frames, mut lost, mut found, mut tracking) = (1usize, 0usize, 0usize, 1usize);
     while !closed.get()
         && let Some(f) = src.next_frame()?
@@ -1145,10 +1129,7 @@ fn run_command(a: &RunArgs) -> Result<(), String> {
         if truth.is_some() {
             boxes.push(est.bbox());
         }
-        if let Some(v) = &mut video {
-            v.write(&f, Some(&est), &tracker.particles())?;
-        }
-        keep(frames - 1, &f, &est, &tracker.particles());
+        draw(frames - 1, &f, &est, &tracker)?;
         lost += usize::from(est.event == Some(Event::LostTarget));
         found += usize::from(est.event == Some(Event::Reacquired));
         tracking += usize::from(est.state == TrackState::Tracking);
@@ -1157,8 +1138,8 @@ fn run_command(a: &RunArgs) -> Result<(), String> {
     }
     pb.finish_and_clear();
     drop(video);
-    if let Some(path) = &a.gif {
-        write_gif(path, &gif, (66 * every as u32).min(1000))?;
+    if let (Some(path), Some(g)) = (&a.gif, &gif) {
+        g.write(path, None, (66 * g.every() as u32).min(1000))?;
     }
     if let Some(t) = &truth {
         let scored = t.get(..boxes.len()).and_then(|t| score(&boxes, t)).ok_or_else(|| {
@@ -1178,7 +1159,7 @@ fn run_command(a: &RunArgs) -> Result<(), String> {
             "{frames} frames in {secs:.2} s ({:.0} fps), tracking {:.1}% of frames, lost {lost} times, re-acquired {found} times, peak memory {}",
             frames as f64 / secs.max(1e-9),
             100.0 * tracking as f64 / frames as f64,
-            peak_memory().map_or_else(|| "unknown".to_string(), |b| format!("{:.1} MB", b as f64 / 1e6)),
+            peak_memory(),
         );
     }
     Ok(())
