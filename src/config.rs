@@ -105,6 +105,9 @@ pub struct Config {
     /// Size and shape searched each frame against the surroundings, or
     /// `None` to leave size to the particles' random walk.
     pub size: Option<SizeSearch>,
+    /// Position refined each frame against the surroundings, or `None` to
+    /// take the filter's mean as it is.
+    pub shift: Option<ShiftSearch>,
     /// Adaptation rate of the surroundings' colour histogram (see
     /// [`crate::foreground`]) on model-update frames, in `[0, 1]`.
     pub surroundings_rate: Real,
@@ -162,8 +165,12 @@ pub struct TemplateCue {
 /// their similarity with the models; the best becomes the estimate, and the
 /// particles are rescaled with it. Contrast penalises a box too large (it
 /// takes in background), the model similarity one too small (it leaves out
-/// colours the model has). There is no search in table mode, whose size is
-/// fixed, nor on a step given a [`crate::ScalePrior`], which sets the size.
+/// colours the model has). Two pulls towards the first box's shape and
+/// area (the scale regularisation of ASMS, Vojíř et al. 2014) keep the box
+/// from wandering one 2% step at a time where contrast and similarity are
+/// flat, as on a dark target against a dark background. There is no search
+/// in table mode, whose size is fixed, nor on a step given a
+/// [`crate::ScalePrior`], which sets the size.
 #[derive(Copy, Clone, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SizeSearch {
@@ -174,6 +181,33 @@ pub struct SizeSearch {
     /// Width and height are searched separately (the aspect ratio follows
     /// the target), or only together.
     pub aspect: bool,
+    /// Penalty on a candidate's aspect ratio departing from the initial
+    /// box's: this times `|ln(aspect / initial aspect)|` is taken off its
+    /// score, in `[0, 10]`.
+    pub aspect_pull: Real,
+    /// Penalty on a candidate's area departing from the initial box's:
+    /// this times `|ln(area / initial area)|` is taken off its score, in
+    /// `[0, 10]`.
+    pub scale_pull: Real,
+}
+
+/// How the estimate's position is refined each frame, after its size: the
+/// box and the boxes one step left, right, up and down are scored like the
+/// size search's candidates (contrast with the ring around them in the map
+/// of [`crate::foreground`], plus `similarity` times their similarity with
+/// the models), and the best is kept, for up to `rounds` steps (stopping
+/// where none of the four beats the box). The particles move with the
+/// estimate, so that a filter that lags a moving target catches up.
+#[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ShiftSearch {
+    /// A step, as a share of the box's width (left and right) or height
+    /// (up and down), in `(0, 0.5]`.
+    pub step: Real,
+    /// Most steps taken, 1 to 8.
+    pub rounds: u8,
+    /// Weight of the candidates' similarity with the models, in `[0, 10]`.
+    pub similarity: Real,
 }
 
 /// When the target model adapts (it never does with `alpha` = 0). Either
@@ -285,7 +319,8 @@ impl Default for Config {
             min_half_axis: 2.0,
             life: Life::Confidence { lost_below: 0.5, found_above: 0.6 },
             redetect: false,
-            size: Some(SizeSearch { step: 0.02, similarity: 1.0, aspect: true }),
+            size: Some(SizeSearch { step: 0.02, similarity: 1.0, aspect: true, aspect_pull: 0.03, scale_pull: 0.05 }),
+            shift: Some(ShiftSearch { step: 0.05, rounds: 1, similarity: 3.0 }),
             surroundings_rate: 0.05,
             weighted_model: false,
             template: None,
@@ -314,7 +349,7 @@ impl Config {
     /// Whether some technique reads the surroundings' colours (see
     /// [`crate::foreground`]), so that the tracker learns them.
     pub fn uses_surroundings(&self) -> bool {
-        self.life != Life::Appearance || self.size.is_some() || self.weighted_model || self.redetect
+        self.life != Life::Appearance || self.size.is_some() || self.shift.is_some() || self.weighted_model || self.redetect
     }
 
     /// Checks every field against its documented range.
@@ -405,6 +440,13 @@ impl Config {
         if let Some(s) = self.size {
             positive("size.step", s.step, 0.5)?;
             check("size.similarity", s.similarity, 0.0, 10.0)?;
+            check("size.aspect_pull", s.aspect_pull, 0.0, 10.0)?;
+            check("size.scale_pull", s.scale_pull, 0.0, 10.0)?;
+        }
+        if let Some(s) = self.shift {
+            positive("shift.step", s.step, 0.5)?;
+            check("shift.rounds", s.rounds as Real, 1.0, 8.0)?;
+            check("shift.similarity", s.similarity, 0.0, 10.0)?;
         }
         check("surroundings_rate", self.surroundings_rate, 0.0, 1.0)?;
         Ok(())

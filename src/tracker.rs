@@ -11,7 +11,7 @@ use crate::geometry::{BoundingBox, Ellipse};
 use crate::histogram::{Clear, Histogram, Layout, Model};
 use crate::likelihood::gaussian;
 use crate::region::{Extents, Lattice};
-use crate::scalar::{Real, exp, normal_from_bits, sqrt, unit_from_bits};
+use crate::scalar::{Real, exp, ln, normal_from_bits, sqrt, unit_from_bits};
 use crate::table::{Bins, Table};
 use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro128PlusPlus;
@@ -209,6 +209,8 @@ struct Target<const K: usize> {
     threshold: Real,
     /// Half axes to give particles re-drawn while searching.
     half_axes: (Real, Real),
+    /// The initial box's half axes, which the size search is pulled towards.
+    initial_axes: (Real, Real),
     /// For [`ModelUpdate::WhenDegraded`]: the sum and count of the
     /// confidences that make up `ρ₀`.
     rho0: (Real, u16),
@@ -617,6 +619,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             frame: (fw, fh),
             threshold: 0.0,
             half_axes: (e.hx.max(cfg.min_half_axis), e.hy.max(cfg.min_half_axis)),
+            initial_axes: (e.hx.max(cfg.min_half_axis), e.hy.max(cfg.min_half_axis)),
             rho0: (0.0, 0),
         });
         let m = &mut target.models;
@@ -861,15 +864,31 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             // One map serves the size search and the confidence: it covers
             // the largest candidate's ring.
             let size = cfg.size.filter(|_| search);
+            let shift = cfg.shift.filter(|_| search);
             let grow = 1.0 + size.map_or(0.0, |s| s.step);
-            scratch.fgmap.compute_around(frame, &ellipse, RING * grow, &models.layout, &models.fg);
+            // A shifted candidate's ring reaches `2 · step` half axes further
+            // per round.
+            let reach = RING * grow + shift.map_or(0.0, |s| 2.0 * s.step * s.rounds as Real);
+            scratch.fgmap.compute_around(frame, &ellipse, reach, &models.layout, &models.fg);
             if let Some(search) = size {
-                let (fx, fy) = search_size(scratch, cfg, frame, models, &ellipse, &search);
+                let (fx, fy) = search_size(scratch, cfg, frame, models, &ellipse, &search, target.initial_axes);
                 ellipse.hx *= fx;
                 ellipse.hy *= fy;
                 for p in particles.iter_mut() {
                     p.hx *= fx;
                     p.hy *= fy;
+                }
+            }
+            if let Some(shift) = shift {
+                let (dx, dy) = search_shift(scratch, cfg, frame, models, &ellipse, &shift);
+                ellipse.cx += dx;
+                ellipse.cy += dy;
+                // Centres stay in the frame, as the dynamics keep them; the
+                // estimate, in the frame, stays inside the particles' hull.
+                let (w, h) = (frame.width() as Real, frame.height() as Real);
+                for p in particles.iter_mut() {
+                    p.x = (p.x + dx).max(0.0).min(w);
+                    p.y = (p.y + dy).max(0.0).min(h);
                 }
             }
             // A box with no surroundings in the frame (it fills the frame)
@@ -1074,6 +1093,7 @@ fn search_size<const K: usize, const E: usize>(
     models: &Models<K>,
     e: &Ellipse,
     search: &crate::config::SizeSearch,
+    (ix, iy): (Real, Real),
 ) -> (Real, Real) {
     let up = 1.0 + search.step;
     let dn = 1.0 / up;
@@ -1094,11 +1114,55 @@ fn search_size<const K: usize, const E: usize>(
         if search.similarity > 0.0 {
             score += search.similarity * sc.similarity(cfg, frame, models, &c, false).sim;
         }
+        if search.aspect_pull > 0.0 {
+            score -= search.aspect_pull * ln((c.hx * iy) / (c.hy * ix)).abs();
+        }
+        if search.scale_pull > 0.0 {
+            score -= search.scale_pull * ln((c.hx * c.hy) / (ix * iy)).abs();
+        }
         if score > best_score {
             (best, best_score) = ((fx, fy), score);
         }
     }
     best
+}
+
+/// The offset of the best box on a hill climb from `e`, one step left,
+/// right, up or down per round, scored like the size search's candidates.
+fn search_shift<const K: usize, const E: usize>(
+    sc: &mut Scratch<K, E>,
+    cfg: &Config,
+    frame: &Frame<'_>,
+    models: &Models<K>,
+    e: &Ellipse,
+    search: &crate::config::ShiftSearch,
+) -> (Real, Real) {
+    let (sx, sy) = (2.0 * search.step * e.hx, 2.0 * search.step * e.hy);
+    let (mut dx, mut dy) = (0.0, 0.0);
+    let w = search.similarity;
+    let score = |sc: &mut Scratch<K, E>, c: &Ellipse| {
+        let contrast = sc.fgmap.contrast(c, RING)?;
+        Some(if w > 0.0 { contrast + w * sc.similarity(cfg, frame, models, c, false).sim } else { contrast })
+    };
+    let Some(mut best) = score(sc, e) else { return (0.0, 0.0) };
+    for _ in 0..search.rounds {
+        let mut next = None;
+        for (mx, my) in [(sx, 0.0), (-sx, 0.0), (0.0, sy), (0.0, -sy)] {
+            let c = Ellipse { cx: e.cx + dx + mx, cy: e.cy + dy + my, ..*e };
+            let inside = c.cx >= 0.0 && c.cx <= frame.width() as Real && c.cy >= 0.0 && c.cy <= frame.height() as Real;
+            if !inside {
+                continue;
+            }
+            if let Some(score) = score(sc, &c)
+                && score > best
+            {
+                (best, next) = (score, Some((mx, my)));
+            }
+        }
+        let Some((mx, my)) = next else { break };
+        (dx, dy) = (dx + mx, dy + my);
+    }
+    (dx, dy)
 }
 
 /// Spots re-detection proposes.

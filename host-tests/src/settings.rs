@@ -40,6 +40,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ("reseed_fraction", "fraction re-drawn per frame while searching"),
     ("min_half_axis", "pixels"),
     ("template", "off | WEIGHT:RATE (grey template cue, NCC, share WEIGHT, adaptation RATE)"),
+    ("shift", "off | STEP:ROUNDS:SIMILARITY (position hill-climbed against the surroundings, steps of STEP box sizes)"),
     ("weighted_model", "on | off (colour model weighted against the surroundings, CBWH)"),
 ];
 
@@ -177,11 +178,39 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
         "size" => {
             c.size = match v.split(':').collect::<Vec<_>>().as_slice() {
                 ["off"] => None,
-                [step, sim] => Some(SizeSearch { step: num(key, step)?, similarity: num(key, sim)?, aspect: true }),
-                [step, sim, "scale"] => {
-                    Some(SizeSearch { step: num(key, step)?, similarity: num(key, sim)?, aspect: false })
-                }
-                _ => return Err(format!("{key}: `{v}`: expected off or STEP:SIMILARITY[:scale]")),
+                [step, sim] => Some(SizeSearch {
+                    step: num(key, step)?,
+                    similarity: num(key, sim)?,
+                    aspect: true,
+                    aspect_pull: 0.0,
+                    scale_pull: 0.0,
+                }),
+                [step, sim, "scale"] => Some(SizeSearch {
+                    step: num(key, step)?,
+                    similarity: num(key, sim)?,
+                    aspect: false,
+                    aspect_pull: 0.0,
+                    scale_pull: 0.0,
+                }),
+                [step, sim, ap, sp] => Some(SizeSearch {
+                    step: num(key, step)?,
+                    similarity: num(key, sim)?,
+                    aspect: true,
+                    aspect_pull: num(key, ap)?,
+                    scale_pull: num(key, sp)?,
+                }),
+                _ => return Err(format!("{key}: `{v}`: expected off, STEP:SIMILARITY[:scale] or STEP:SIMILARITY:ASPECT_PULL:SCALE_PULL")),
+            }
+        }
+        "shift" => {
+            c.shift = match v.split(':').collect::<Vec<_>>().as_slice() {
+                ["off"] => None,
+                [step, rounds, sim] => Some(pftrack::ShiftSearch {
+                    step: num(key, step)?,
+                    rounds: rounds.parse().map_err(|_| format!("{key}: `{rounds}` is not a whole number"))?,
+                    similarity: num(key, sim)?,
+                }),
+                _ => return Err(format!("{key}: `{v}`: expected off or STEP:ROUNDS:SIMILARITY")),
             }
         }
         "template" => {
@@ -235,6 +264,7 @@ mod tests {
                 "spread_sigma" => "4:0.01:0.3",
                 "lost_after" => "4",
                 "size" => "0.05:2",
+                "shift" => "0.1:2:1",
                 "life" => "appearance",
                 "redetect" => "on",
                 "weighted_model" => "on",
