@@ -281,8 +281,9 @@ impl Default for Config {
     /// the first paper's filter (RGB 8x8x8, α = 0.1, π_T = 0.15) with the
     /// third paper's checkerboard and Sobel edge cue (8 bins, threshold
     /// 100), a per-region budget of 1000 samples, damped velocities with
-    /// wide position noise, σ from the particles' spread, the size searched
-    /// against the surroundings, and the confidence-driven life cycle.
+    /// wide position noise, σ from the particles' spread, the size (pulled
+    /// towards the first box's) and then the position searched against the
+    /// surroundings, and the confidence-driven life cycle.
     fn default() -> Self {
         Config {
             binning: Binning::Rgb8x8x8,
@@ -349,7 +350,11 @@ impl Config {
     /// Whether some technique reads the surroundings' colours (see
     /// [`crate::foreground`]), so that the tracker learns them.
     pub fn uses_surroundings(&self) -> bool {
-        self.life != Life::Appearance || self.size.is_some() || self.shift.is_some() || self.weighted_model || self.redetect
+        self.life != Life::Appearance
+            || self.size.is_some()
+            || self.shift.is_some()
+            || self.weighted_model
+            || self.redetect
     }
 
     /// Checks every field against its documented range.
@@ -465,7 +470,7 @@ mod tests {
     #[test]
     fn each_bad_field_is_named() {
         type Case = (fn(&mut Config), &'static str, ParamProblem);
-        let cases: [Case; 15] = [
+        let cases: [Case; 19] = [
             (|c| c.combination = Combination::Weighted { colour: 1.5 }, "combination.colour", ParamProblem::OutOfRange),
             (
                 |c| c.edges = Some(EdgeCue { bins: 7, threshold: 50, flat_bin: true }),
@@ -493,6 +498,26 @@ mod tests {
             (|c| c.lost_after = 0, "lost_after", ParamProblem::OutOfRange),
             (|c| c.reseed_fraction = Real::NEG_INFINITY, "reseed_fraction", ParamProblem::NonFinite),
             (|c| c.min_half_axis = 0.5, "min_half_axis", ParamProblem::OutOfRange),
+            (
+                |c| c.size = Some(SizeSearch { scale_pull: -0.1, ..Config::default().size.unwrap() }),
+                "size.scale_pull",
+                ParamProblem::OutOfRange,
+            ),
+            (
+                |c| c.size = Some(SizeSearch { aspect_pull: Real::NAN, ..Config::default().size.unwrap() }),
+                "size.aspect_pull",
+                ParamProblem::NonFinite,
+            ),
+            (
+                |c| c.shift = Some(ShiftSearch { step: 0.0, rounds: 1, similarity: 3.0 }),
+                "shift.step",
+                ParamProblem::OutOfRange,
+            ),
+            (
+                |c| c.shift = Some(ShiftSearch { step: 0.05, rounds: 0, similarity: 3.0 }),
+                "shift.rounds",
+                ParamProblem::OutOfRange,
+            ),
         ];
         for (mutate, field, problem) in cases {
             let mut c = Config::default();

@@ -1262,6 +1262,30 @@ mod tests {
     const BOX: BoundingBox = BoundingBox::new(44.0, 29.0, 32.0, 32.0);
 
     #[test]
+    fn the_shift_search_climbs_onto_the_target() {
+        // Reason: generated scene with known geometry. On the map of the
+        // learnt odds, a box the target's size has the most contrast where it
+        // covers the target exactly: each step towards it takes in target
+        // and gives its ring background. From 4 px right of and 3 px above
+        // the target, steps of 1.6 px (5% of the 32 px box) climb to within
+        // a step of it, left and down; a box already on it stays.
+        let px = scene(None, 0);
+        let f = frame(&px);
+        let mut t: Tracker<60> = Tracker::new(Config::default(), 1).unwrap();
+        t.init(&f, BOX).unwrap();
+        let Tracker { config: cfg, scratch, target, .. } = &mut t;
+        let models = &target.as_ref().unwrap().models;
+        let shift = crate::config::ShiftSearch { step: 0.05, rounds: 4, similarity: 3.0 };
+        let on = Ellipse { cx: 60.0, cy: 45.0, hx: 16.0, hy: 16.0 };
+        let off = Ellipse { cx: 64.0, cy: 42.0, ..on };
+        scratch.fgmap.compute_around(&f, &on, 2.0, &models.layout, &models.fg);
+        let (dx, dy) = search_shift(scratch, cfg, &f, models, &off, &shift);
+        assert!(dx < 0.0 && (4.0 + dx).abs() <= 1.6, "dx {dx}");
+        assert!(dy > 0.0 && (dy - 3.0).abs() <= 1.6, "dy {dy}");
+        assert_eq!(search_shift(scratch, cfg, &f, models, &on, &shift), (0.0, 0.0));
+    }
+
+    #[test]
     fn median_of_four_and_the_occluded_quadrant_by_hand() {
         // Reason: hand values. The median of 4 is the mean of the middle two.
         assert_eq!(median4([0.9, 0.1, 0.8, 0.7]), 0.75);

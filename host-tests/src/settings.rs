@@ -40,6 +40,10 @@ pub const KEYS: &[(&str, &str)] = &[
     ("reseed_fraction", "fraction re-drawn per frame while searching"),
     ("min_half_axis", "pixels"),
     ("template", "off | WEIGHT:RATE (grey template cue, NCC, share WEIGHT, adaptation RATE)"),
+    ("life", "appearance | confidence:LOST:FOUND (what drives the tracking / lost states)"),
+    ("redetect", "on | off (re-drawn particles go where the target's colours stand out while lost)"),
+    ("size", "off | STEP:SIMILARITY:ASPECT_PULL:SCALE_PULL | STEP:SIMILARITY:scale:SCALE_PULL | STEP:SIMILARITY"),
+    ("surroundings_rate", "adaptation rate of the surroundings' histogram"),
     ("shift", "off | STEP:ROUNDS:SIMILARITY (position hill-climbed against the surroundings, steps of STEP box sizes)"),
     ("weighted_model", "on | off (colour model weighted against the surroundings, CBWH)"),
 ];
@@ -185,12 +189,12 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
                     aspect_pull: 0.0,
                     scale_pull: 0.0,
                 }),
-                [step, sim, "scale"] => Some(SizeSearch {
+                [step, sim, "scale", sp] => Some(SizeSearch {
                     step: num(key, step)?,
                     similarity: num(key, sim)?,
                     aspect: false,
                     aspect_pull: 0.0,
-                    scale_pull: 0.0,
+                    scale_pull: num(key, sp)?,
                 }),
                 [step, sim, ap, sp] => Some(SizeSearch {
                     step: num(key, step)?,
@@ -199,7 +203,11 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
                     aspect_pull: num(key, ap)?,
                     scale_pull: num(key, sp)?,
                 }),
-                _ => return Err(format!("{key}: `{v}`: expected off, STEP:SIMILARITY[:scale] or STEP:SIMILARITY:ASPECT_PULL:SCALE_PULL")),
+                _ => {
+                    return Err(format!(
+                        "{key}: `{v}`: expected off, STEP:SIMILARITY:ASPECT_PULL:SCALE_PULL, STEP:SIMILARITY:scale:SCALE_PULL or STEP:SIMILARITY (no pulls)"
+                    ));
+                }
             }
         }
         "shift" => {
