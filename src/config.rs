@@ -280,7 +280,7 @@ impl Default for Config {
     /// split and kept where the *check* split agrees (docs/accuracy.md):
     /// the first paper's filter (RGB 8x8x8, α = 0.1, π_T = 0.15) with the
     /// third paper's checkerboard and Sobel edge cue (8 bins, threshold
-    /// 100), a per-region budget of 1000 samples, damped velocities with
+    /// 100), a per-region budget of 500 samples, damped velocities with
     /// wide position noise, σ from the particles' spread, the size (pulled
     /// towards the first box's) and then the position searched against the
     /// surroundings, and the confidence-driven life cycle.

@@ -106,7 +106,7 @@ pub struct MeanShiftConfig {
 
 impl Default for MeanShiftConfig {
     /// Comaniciu's settings (20 iterations, ±5 % scale with γ = 0.1) on the
-    /// particle filter's histograms (RGB 8x8x8, checkerboard, 1000 samples);
+    /// particle filter's histograms (RGB 8x8x8, checkerboard) with 1000 samples a region;
     /// the climb stops at a quarter-pixel step.
     fn default() -> Self {
         MeanShiftConfig {
