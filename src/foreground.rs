@@ -260,10 +260,18 @@ impl<const F: usize> ForegroundMap<F> {
 
     /// The sum and count of the cells whose pixels lie in `[x0, x1) × [y0, y1)`.
     pub(crate) fn sum(&self, x0: Real, y0: Real, x1: Real, y1: Real) -> (u32, u32) {
-        // Cells i with v0 <= origin + i·step < v1 are those from index(v0)
+        let s = self.step as Real;
+        // The first cell at or after coordinate `v` along an axis whose cell
+        // 0 is at `origin` and which has `n` cells (ceil, clipped to [0, n]):
+        // cells i with v0 <= origin + i·step < v1 are those from index(v0)
         // to index(v1).
-        let (i0, i1) = (self.index(x0, self.x0, self.cols), self.index(x1, self.x0, self.cols));
-        let (j0, j1) = (self.index(y0, self.y0, self.rows), self.index(y1, self.y0, self.rows));
+        let index = |v: Real, origin: i32, n: i32| -> i32 {
+            let c = crate::scalar::clamp((v - origin as Real) / s, 0.0, n as Real);
+            let f = c as i32;
+            if (f as Real) < c { f + 1 } else { f }
+        };
+        let (i0, i1) = (index(x0, self.x0, self.cols), index(x1, self.x0, self.cols));
+        let (j0, j1) = (index(y0, self.y0, self.rows), index(y1, self.y0, self.rows));
         if i1 <= i0 || j1 <= j0 {
             return (0, 0);
         }
@@ -271,14 +279,6 @@ impl<const F: usize> ForegroundMap<F> {
         let at = |i: i32, j: i32| self.sums.get(j as usize * stride + i as usize).copied().unwrap_or(0);
         let total = at(i1, j1).wrapping_sub(at(i0, j1)).wrapping_sub(at(i1, j0)).wrapping_add(at(i0, j0));
         (total as u32, ((i1 - i0) * (j1 - j0)) as u32)
-    }
-
-    /// The first cell at or after coordinate `v` along an axis whose cell 0
-    /// is at `origin` and which has `n` cells (ceil, clipped to `[0, n]`).
-    fn index(&self, v: Real, origin: i32, n: i32) -> i32 {
-        let c = crate::scalar::clamp((v - origin as Real) / self.step as Real, 0.0, n as Real);
-        let f = c as i32;
-        if (f as Real) < c { f + 1 } else { f }
     }
 
     /// The contrast of the box of ellipse `e`: its mean odds minus the mean

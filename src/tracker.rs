@@ -1083,6 +1083,25 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     }
 }
 
+/// The score the size and position searches rank a candidate box by: its
+/// contrast with its ring in the foreground map plus `similarity` times its
+/// similarity with the models; `None` where the map cannot say.
+fn box_score<const K: usize, const E: usize>(
+    sc: &mut Scratch<K, E>,
+    cfg: &Config,
+    frame: &Frame<'_>,
+    models: &Models<K>,
+    c: &Ellipse,
+    similarity: Real,
+) -> Option<Real> {
+    let contrast = sc.fgmap.contrast(c, RING)?;
+    if similarity > 0.0 {
+        Some(contrast + similarity * sc.similarity(cfg, frame, models, c, false).sim)
+    } else {
+        Some(contrast)
+    }
+}
+
 /// The factors on the half axes of `e` whose box scores best (see
 /// [`crate::SizeSearch`]); the foreground map must cover the largest
 /// candidate's ring.
@@ -1110,10 +1129,7 @@ fn search_size<const K: usize, const E: usize>(
     let mut best_score = Real::NEG_INFINITY;
     for &(fx, fy) in candidates {
         let c = Ellipse { hx: e.hx * fx, hy: e.hy * fy, ..*e };
-        let Some(mut score) = sc.fgmap.contrast(&c, RING) else { continue };
-        if search.similarity > 0.0 {
-            score += search.similarity * sc.similarity(cfg, frame, models, &c, false).sim;
-        }
+        let Some(mut score) = box_score(sc, cfg, frame, models, &c, search.similarity) else { continue };
         if search.aspect_pull > 0.0 {
             score -= search.aspect_pull * ln((c.hx * iy) / (c.hy * ix)).abs();
         }
@@ -1138,22 +1154,17 @@ fn search_shift<const K: usize, const E: usize>(
     search: &crate::config::ShiftSearch,
 ) -> (Real, Real) {
     let (sx, sy) = (2.0 * search.step * e.hx, 2.0 * search.step * e.hy);
+    let (w, h) = (frame.width() as Real, frame.height() as Real);
     let (mut dx, mut dy) = (0.0, 0.0);
-    let w = search.similarity;
-    let score = |sc: &mut Scratch<K, E>, c: &Ellipse| {
-        let contrast = sc.fgmap.contrast(c, RING)?;
-        Some(if w > 0.0 { contrast + w * sc.similarity(cfg, frame, models, c, false).sim } else { contrast })
-    };
-    let Some(mut best) = score(sc, e) else { return (0.0, 0.0) };
+    let Some(mut best) = box_score(sc, cfg, frame, models, e, search.similarity) else { return (0.0, 0.0) };
     for _ in 0..search.rounds {
         let mut next = None;
         for (mx, my) in [(sx, 0.0), (-sx, 0.0), (0.0, sy), (0.0, -sy)] {
             let c = Ellipse { cx: e.cx + dx + mx, cy: e.cy + dy + my, ..*e };
-            let inside = c.cx >= 0.0 && c.cx <= frame.width() as Real && c.cy >= 0.0 && c.cy <= frame.height() as Real;
-            if !inside {
+            if !(c.cx >= 0.0 && c.cx <= w && c.cy >= 0.0 && c.cy <= h) {
                 continue;
             }
-            if let Some(score) = score(sc, &c)
+            if let Some(score) = box_score(sc, cfg, frame, models, &c, search.similarity)
                 && score > best
             {
                 (best, next) = (score, Some((mx, my)));

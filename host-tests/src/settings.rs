@@ -180,35 +180,28 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
         "min_half_axis" => c.min_half_axis = num(key, v)?,
         "weighted_model" => c.weighted_model = choice(key, v, &[("on", true), ("off", false)])?,
         "size" => {
-            c.size = match v.split(':').collect::<Vec<_>>().as_slice() {
-                ["off"] => None,
-                [step, sim] => Some(SizeSearch {
-                    step: num(key, step)?,
-                    similarity: num(key, sim)?,
-                    aspect: true,
-                    aspect_pull: 0.0,
-                    scale_pull: 0.0,
-                }),
-                [step, sim, "scale", sp] => Some(SizeSearch {
-                    step: num(key, step)?,
-                    similarity: num(key, sim)?,
-                    aspect: false,
-                    aspect_pull: 0.0,
-                    scale_pull: num(key, sp)?,
-                }),
-                [step, sim, ap, sp] => Some(SizeSearch {
-                    step: num(key, step)?,
-                    similarity: num(key, sim)?,
-                    aspect: true,
-                    aspect_pull: num(key, ap)?,
-                    scale_pull: num(key, sp)?,
-                }),
+            // (step, similarity, aspect searched, aspect pull, area pull)
+            let (step, sim, aspect, ap, sp) = match v.split(':').collect::<Vec<_>>().as_slice() {
+                ["off"] => {
+                    c.size = None;
+                    return Ok(());
+                }
+                [step, sim] => (*step, *sim, true, "0", "0"),
+                [step, sim, "scale", sp] => (*step, *sim, false, "0", *sp),
+                [step, sim, ap, sp] => (*step, *sim, true, *ap, *sp),
                 _ => {
                     return Err(format!(
                         "{key}: `{v}`: expected off, STEP:SIMILARITY:ASPECT_PULL:SCALE_PULL, STEP:SIMILARITY:scale:SCALE_PULL or STEP:SIMILARITY (no pulls)"
                     ));
                 }
-            }
+            };
+            c.size = Some(SizeSearch {
+                step: num(key, step)?,
+                similarity: num(key, sim)?,
+                aspect,
+                aspect_pull: num(key, ap)?,
+                scale_pull: num(key, sp)?,
+            });
         }
         "shift" => {
             c.shift = match v.split(':').collect::<Vec<_>>().as_slice() {
