@@ -208,6 +208,11 @@ pub struct ShiftSearch {
     pub rounds: u8,
     /// Weight of the candidates' similarity with the models, in `[0, 10]`.
     pub similarity: Real,
+    /// Weight of the candidates' grey-level correlation with the first
+    /// template (see [`crate::template`]), in `[0, 10]`: colour cannot tell
+    /// a box from the same box a few pixels off on a target of one colour,
+    /// the layout of light and dark can.
+    pub template: Real,
 }
 
 /// When the target model adapts (it never does with `alpha` = 0). Either
@@ -321,7 +326,7 @@ impl Default for Config {
             life: Life::Confidence { lost_below: 0.5, found_above: 0.6 },
             redetect: false,
             size: Some(SizeSearch { step: 0.02, similarity: 1.0, aspect: true, aspect_pull: 0.03, scale_pull: 0.05 }),
-            shift: Some(ShiftSearch { step: 0.05, rounds: 1, similarity: 3.0 }),
+            shift: Some(ShiftSearch { step: 0.05, rounds: 1, similarity: 3.0, template: 0.15 }),
             surroundings_rate: 0.05,
             weighted_model: false,
             template: None,
@@ -355,6 +360,12 @@ impl Config {
             || self.shift.is_some()
             || self.weighted_model
             || self.redetect
+    }
+
+    /// Whether some technique reads the grey-level template (see
+    /// [`crate::template`]), so that the tracker learns it.
+    pub fn uses_template(&self) -> bool {
+        self.life != Life::Appearance || self.template.is_some() || self.shift.is_some_and(|s| s.template > 0.0)
     }
 
     /// Checks every field against its documented range.
@@ -452,6 +463,7 @@ impl Config {
             positive("shift.step", s.step, 0.5)?;
             check("shift.rounds", s.rounds as Real, 1.0, 8.0)?;
             check("shift.similarity", s.similarity, 0.0, 10.0)?;
+            check("shift.template", s.template, 0.0, 10.0)?;
         }
         check("surroundings_rate", self.surroundings_rate, 0.0, 1.0)?;
         Ok(())
@@ -509,12 +521,12 @@ mod tests {
                 ParamProblem::NonFinite,
             ),
             (
-                |c| c.shift = Some(ShiftSearch { step: 0.0, rounds: 1, similarity: 3.0 }),
+                |c| c.shift = Some(ShiftSearch { step: 0.0, ..Config::default().shift.unwrap() }),
                 "shift.step",
                 ParamProblem::OutOfRange,
             ),
             (
-                |c| c.shift = Some(ShiftSearch { step: 0.05, rounds: 0, similarity: 3.0 }),
+                |c| c.shift = Some(ShiftSearch { rounds: 0, ..Config::default().shift.unwrap() }),
                 "shift.rounds",
                 ParamProblem::OutOfRange,
             ),

@@ -92,8 +92,8 @@ impl Dynamics {
         p.hy *= 1.0 + p.a_dot + self.scale_noise * n();
         keep_inside(&mut p.x, &mut p.vx, b.width);
         keep_inside(&mut p.y, &mut p.vy, b.height);
-        p.hx = clamp(p.hx, b.min_half, (0.5 * b.width).max(b.min_half));
-        p.hy = clamp(p.hy, b.min_half, (0.5 * b.height).max(b.min_half));
+        p.hx = clamp(p.hx, b.min_half, max(0.5 * b.width, b.min_half));
+        p.hy = clamp(p.hy, b.min_half, max(0.5 * b.height, b.min_half));
     }
 }
 
@@ -143,7 +143,7 @@ pub(crate) fn resample<R: Rng, const N: usize>(
 ) {
     let mut acc = 0.0;
     for w in weights.iter_mut() {
-        acc += w.max(0.0);
+        acc += max(*w, 0.0);
         *w = acc;
     }
     if !(acc > 0.0) || !acc.is_finite() {

@@ -5,7 +5,7 @@
 //! its target can still find it again (third paper). `σ` is either fixed or
 //! chosen each frame so that the best particle gets `log L = −1`.
 
-use crate::scalar::{Real, exp};
+use crate::scalar::{self, Real, exp};
 
 /// How the likelihood's width is chosen.
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -110,7 +110,7 @@ impl Likelihood {
             // With no spread to measure, the floor.
             Sigma::Spread { .. } => self.sigma_and_offset(d2_min, d2_min).0,
             Sigma::Adaptive { min, max } => {
-                let d2 = d2_min.max(0.0);
+                let d2 = scalar::max(d2_min, 0.0);
                 let s = match self.shape {
                     Shape::Gaussian => crate::scalar::sqrt(0.5 * d2),
                     Shape::Exponential => crate::scalar::sqrt(d2),
@@ -129,7 +129,7 @@ impl Likelihood {
     pub fn sigma_and_offset(&self, d2_min: Real, d2_mean: Real) -> (Real, Real) {
         match self.sigma {
             Sigma::Spread { spread, min, max } => {
-                let s2 = (d2_mean - d2_min).max(0.0) / (2.0 * spread);
+                let s2 = scalar::max(d2_mean - d2_min, 0.0) / (2.0 * spread);
                 let sigma = crate::scalar::clamp(crate::scalar::sqrt(s2), min, max);
                 (sigma, d2_min - 2.0 * sigma * sigma)
             }
@@ -141,14 +141,14 @@ impl Likelihood {
     pub fn weight(&self, d2: Real, sigma: Real) -> Real {
         match self.shape {
             Shape::Gaussian => gaussian(d2, sigma) + self.eps,
-            Shape::Exponential => exp(-crate::scalar::sqrt(d2.max(0.0)) / sigma) + self.eps,
+            Shape::Exponential => exp(-crate::scalar::sqrt(scalar::max(d2, 0.0)) / sigma) + self.eps,
         }
     }
 }
 
 /// `exp(−d² / (2σ²))`, the likelihood without its floor.
 pub fn gaussian(d2: Real, sigma: Real) -> Real {
-    exp(-d2.max(0.0) / (2.0 * sigma * sigma))
+    exp(-scalar::max(d2, 0.0) / (2.0 * sigma * sigma))
 }
 
 #[cfg(test)]

@@ -44,7 +44,10 @@ pub const KEYS: &[(&str, &str)] = &[
     ("redetect", "on | off (re-drawn particles go where the target's colours stand out while lost)"),
     ("size", "off | STEP:SIMILARITY:ASPECT_PULL:SCALE_PULL | STEP:SIMILARITY:scale:SCALE_PULL | STEP:SIMILARITY"),
     ("surroundings_rate", "adaptation rate of the surroundings' histogram"),
-    ("shift", "off | STEP:ROUNDS:SIMILARITY (position hill-climbed against the surroundings, steps of STEP box sizes)"),
+    (
+        "shift",
+        "off | STEP:ROUNDS:SIMILARITY:TEMPLATE (position hill-climbed against the surroundings, steps of STEP box sizes)",
+    ),
     ("weighted_model", "on | off (colour model weighted against the surroundings, CBWH)"),
 ];
 
@@ -206,12 +209,13 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
         "shift" => {
             c.shift = match v.split(':').collect::<Vec<_>>().as_slice() {
                 ["off"] => None,
-                [step, rounds, sim] => Some(pftrack::ShiftSearch {
+                [step, rounds, sim, template] => Some(pftrack::ShiftSearch {
                     step: num(key, step)?,
                     rounds: rounds.parse().map_err(|_| format!("{key}: `{rounds}` is not a whole number"))?,
                     similarity: num(key, sim)?,
+                    template: num(key, template)?,
                 }),
-                _ => return Err(format!("{key}: `{v}`: expected off or STEP:ROUNDS:SIMILARITY")),
+                _ => return Err(format!("{key}: `{v}`: expected off or STEP:ROUNDS:SIMILARITY:TEMPLATE")),
             }
         }
         "template" => {
@@ -265,7 +269,7 @@ mod tests {
                 "spread_sigma" => "4:0.01:0.3",
                 "lost_after" => "4",
                 "size" => "0.05:2",
-                "shift" => "0.1:2:1",
+                "shift" => "0.1:2:1:0.5",
                 "life" => "appearance",
                 "redetect" => "on",
                 "weighted_model" => "on",
