@@ -195,9 +195,11 @@ pub struct SizeSearch {
 /// box and the boxes one step left, right, up and down are scored like the
 /// size search's candidates (contrast with the ring around them in the map
 /// of [`crate::foreground`], plus `similarity` times their similarity with
-/// the models), and the best is kept, for up to `rounds` steps (stopping
-/// where none of the four beats the box). The particles move with the
-/// estimate, so that a filter that lags a moving target catches up.
+/// the models), plus `template` times their grey-level correlation with
+/// the first template, and the best is kept, for up to `rounds` steps
+/// (stopping where none of the four beats the box). The particles move
+/// with the estimate, so that a filter that lags a moving target catches
+/// up.
 #[derive(Copy, Clone, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct ShiftSearch {
@@ -287,8 +289,9 @@ impl Default for Config {
     /// third paper's checkerboard and Sobel edge cue (8 bins, threshold
     /// 100), a per-region budget of 500 samples, damped velocities with
     /// wide position noise, σ from the particles' spread, the size (pulled
-    /// towards the first box's) and then the position searched against the
-    /// surroundings, and the confidence-driven life cycle.
+    /// towards the first box's) and then the position (with the first grey
+    /// template's layout) searched against the surroundings, and the
+    /// confidence-driven life cycle.
     fn default() -> Self {
         Config {
             binning: Binning::Rgb8x8x8,

@@ -117,13 +117,29 @@ fn sample(frame: &Frame<'_>, e: &Ellipse) -> Patch {
     let mut ys = [0usize; GRID * PER_CELL as usize];
     for (coords, n, size, start, limit) in [(&mut xs, nx, cw, e.cx - e.hx, w), (&mut ys, ny, ch, e.cy - e.hy, h)] {
         let sub = size / n as Real;
-        for (k, c) in coords.iter_mut().take(GRID * n).enumerate() {
-            let (cell, j) = (k / n.max(1), k % n.max(1));
-            let v = start + cell as Real * size + (j as Real + 0.5) * sub;
-            *c = crate::region::floor(v).max(0).min(limit - 1) as usize;
+        // Cell by cell, point by point: no division (a library call on a
+        // Cortex-M0+, which has no divide instruction).
+        let mut slots = coords.iter_mut();
+        for cell in 0..GRID {
+            for j in 0..n {
+                let v = start + cell as Real * size + (j as Real + 0.5) * sub;
+                if let Some(c) = slots.next() {
+                    *c = crate::region::floor(v).max(0).min(limit - 1) as usize;
+                }
+            }
         }
     }
     let per = (nx * ny) as u32;
+    // The mean of `per` reads, rounded; `per` is 1, 2 or 4 with
+    // PER_CELL = 2, and a shift, unlike a division, is one instruction on
+    // every core.
+    let mean = |c: u32| {
+        if per.is_power_of_two() {
+            (c + per / 2) >> per.trailing_zeros()
+        } else {
+            (c + per / 2).checked_div(per).unwrap_or(0)
+        }
+    };
     let mut cells = [0u32; GRID];
     for (j, rows) in ys.chunks(ny.max(1)).take(GRID).enumerate() {
         cells.iter_mut().for_each(|c| *c = 0);
@@ -143,7 +159,7 @@ fn sample(frame: &Frame<'_>, e: &Ellipse) -> Patch {
             }
         }
         for (i, &c) in cells.iter().enumerate() {
-            let v = (c + per / 2).checked_div(per).unwrap_or(0);
+            let v = mean(c);
             if let Some(t) = p.samples.get_mut(j * GRID + i) {
                 *t = v as u8;
             }
