@@ -1021,6 +1021,25 @@ mod tests {
     use crate::region::for_each_in_ellipse;
 
     #[test]
+    fn normalising_in_32_bits_gives_the_64_bit_value() {
+        // Reason: cross-check of two implementations. The 32-bit fast path
+        // must give exactly the rounded 64-bit quotient, saturated, for
+        // every count below 2^15 (both sides of the switch included) and
+        // totals from 1 to the largest u32.
+        let wide = |c: u32, t: u32| ((c as u64 * Q_ONE + (t as u64 >> 1)) / t as u64).min(u16::MAX as u64) as u16;
+        let mut next = crate::testing::lcg(11);
+        let mut totals = vec![1, 2, 3, 255, 256, 40_000, 65_535, 65_536, 1 << 20, u32::MAX - 1, u32::MAX];
+        totals.extend((0..2000).map(|_| next() | 1));
+        let mut counts = vec![0, 1, 2, 100, 4095, (1 << 15) - 1, 1 << 15, (1 << 15) + 1, 70_000];
+        counts.extend((0..50).map(|_| next() >> 17));
+        for &t in &totals {
+            for &c in &counts {
+                assert_eq!(normalised(c, t), wide(c, t), "c {c} total {t}");
+            }
+        }
+    }
+
+    #[test]
     fn histogram_mass_is_the_kernel_mass() {
         // Reason: every sampled pixel lands in exactly one bin, so the bins sum
         // to the total, which is the kernel mass the region walk visits, under
