@@ -3,9 +3,9 @@
 //! which a histogram does not.
 //!
 //! The target box is read on a `G × G` grid of luma samples (see
-//! `PER_CELL` for how many pixels make a sample). A candidate box is read the same
-//! way, at its own size, so the comparison also penalises a wrong scale or
-//! aspect. The score is the Pearson correlation of the two sample vectors,
+//! `PER_CELL` for how many pixels make a sample). A candidate box is read
+//! the same way, at its own size, so the comparison also penalises a wrong
+//! scale or aspect. The score is the Pearson correlation of the two sample vectors,
 //! in `[-1, 1]`: insensitive to brightness and contrast changes, high only
 //! when the layout of light and dark matches.
 
@@ -129,17 +129,9 @@ fn sample(frame: &Frame<'_>, e: &Ellipse) -> Patch {
             }
         }
     }
+    // At least one read per cell; 1, 2 or 4 with PER_CELL = 2, which
+    // `div_small` divides by without a divide instruction.
     let per = (nx * ny) as u32;
-    // The mean of `per` reads, rounded; `per` is 1, 2 or 4 with
-    // PER_CELL = 2, and a shift, unlike a division, is one instruction on
-    // every core.
-    let mean = |c: u32| {
-        if per.is_power_of_two() {
-            (c + per / 2) >> per.trailing_zeros()
-        } else {
-            (c + per / 2).checked_div(per).unwrap_or(0)
-        }
-    };
     let mut cells = [0u32; GRID];
     for (j, rows) in ys.chunks(ny.max(1)).take(GRID).enumerate() {
         cells.iter_mut().for_each(|c| *c = 0);
@@ -159,7 +151,8 @@ fn sample(frame: &Frame<'_>, e: &Ellipse) -> Patch {
             }
         }
         for (i, &c) in cells.iter().enumerate() {
-            let v = mean(c);
+            // The mean of the cell's reads, rounded.
+            let v = crate::region::div_small(c + per / 2, per);
             if let Some(t) = p.samples.get_mut(j * GRID + i) {
                 *t = v as u8;
             }
