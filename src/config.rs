@@ -111,10 +111,15 @@ pub struct Config {
     /// Adaptation rate of the surroundings' colour histogram (see
     /// [`crate::foreground`]) on model-update frames, in `[0, 1]`.
     pub surroundings_rate: Real,
-    /// Weigh the colour model's bins by how much more of each colour the
-    /// target has than its surroundings (background-weighted histograms,
-    /// CBWH, Ning et al. 2012), refreshed with the model.
-    pub weighted_model: bool,
+    /// How strongly the colour model's bins are weighted by how much more
+    /// of each colour the target has than its surroundings, in `[0, 1]`:
+    /// bin `u` counts `1 − s + s · P(target | u)` times (see
+    /// [`crate::foreground`]), refreshed with the model. 1 is the
+    /// background-weighted histogram of CBWH (Ning et al. 2012), which
+    /// drops a colour the surroundings share even where it is the
+    /// target's own; 0.5 halves such a colour at most; 0 leaves the model
+    /// as learnt.
+    pub background_weight: Real,
     /// The grey-level template cue (see [`crate::template`]) in each
     /// particle's similarity, or `None`.
     pub template: Option<TemplateCue>,
@@ -331,7 +336,7 @@ impl Default for Config {
             size: Some(SizeSearch { step: 0.02, similarity: 1.0, aspect: true, aspect_pull: 0.03, scale_pull: 0.05 }),
             shift: Some(ShiftSearch { step: 0.05, rounds: 1, similarity: 3.0, template: 0.15 }),
             surroundings_rate: 0.05,
-            weighted_model: false,
+            background_weight: 0.0,
             template: None,
         }
     }
@@ -361,7 +366,7 @@ impl Config {
         self.life != Life::Appearance
             || self.size.is_some()
             || self.shift.is_some()
-            || self.weighted_model
+            || self.background_weight > 0.0
             || self.redetect
     }
 
@@ -469,6 +474,7 @@ impl Config {
             check("shift.template", s.template, 0.0, 10.0)?;
         }
         check("surroundings_rate", self.surroundings_rate, 0.0, 1.0)?;
+        check("background_weight", self.background_weight, 0.0, 1.0)?;
         Ok(())
     }
 }
@@ -485,7 +491,7 @@ mod tests {
     #[test]
     fn each_bad_field_is_named() {
         type Case = (fn(&mut Config), &'static str, ParamProblem);
-        let cases: [Case; 19] = [
+        let cases: [Case; 21] = [
             (|c| c.combination = Combination::Weighted { colour: 1.5 }, "combination.colour", ParamProblem::OutOfRange),
             (
                 |c| c.edges = Some(EdgeCue { bins: 7, threshold: 50, flat_bin: true }),
@@ -533,6 +539,8 @@ mod tests {
                 "shift.rounds",
                 ParamProblem::OutOfRange,
             ),
+            (|c| c.background_weight = 1.5, "background_weight", ParamProblem::OutOfRange),
+            (|c| c.background_weight = Real::NAN, "background_weight", ParamProblem::NonFinite),
         ];
         for (mutate, field, problem) in cases {
             let mut c = Config::default();

@@ -811,6 +811,14 @@ impl<const K: usize> Model<K> {
     /// that segment) unchanged.
     #[inline(never)]
     pub fn blend(&mut self, h: &Histogram<K>, alpha: Real) {
+        self.blend_bins(h, alpha);
+        self.refresh_roots();
+    }
+
+    /// [`Model::blend`] short of the roots the similarity sums read, for a
+    /// caller that recomputes them at once ([`Model::reweight`]): 512
+    /// square roots a model update saved.
+    pub(crate) fn blend_bins(&mut self, h: &Histogram<K>, alpha: Real) {
         if h.total == 0 || !(alpha > 0.0) {
             return;
         }
@@ -827,26 +835,42 @@ impl<const K: usize> Model<K> {
                 *q = v.min(u16::MAX as u64) as u16;
             }
         }
-        self.refresh_roots();
     }
 
-    /// Weighs the model's bins by `w` (in `0..=LEVELS` of
-    /// [`crate::foreground`]) for the similarity sums: the roots become those
-    /// of `q(u) · w(u)`, renormalised, while `q` itself stays unweighted
-    /// for blending (background-weighted histograms, CBWH).
-    pub(crate) fn reweight(&mut self, w: &[u8; K]) {
-        // Each segment's bin u takes the weight of colour bin u.
+    /// Weighs the model's bins by the odds `w` (`P(target | colour)` in
+    /// `0..=LEVELS` of [`crate::foreground`]) at `strength` `s` in `[0, 1]`:
+    /// the roots become those of `q(u) · (1 − s + s · w(u) / LEVELS)`,
+    /// renormalised per segment, while `q` itself stays unweighted for
+    /// blending (background-weighted histograms, CBWH, at `s` = 1).
+    pub(crate) fn reweight(&mut self, w: &[u8; K], strength: Real) {
+        use crate::foreground::LEVELS;
+        let s = crate::scalar::clamp(strength, 0.0, 1.0);
+        // Sixteenths of `(1 − s) · LEVELS + s · o` for each odds level `o`:
+        // at most 16 · 15 = 240, so `q · weight` < 2^24 and a segment's sum
+        // (its q add up to about 2^16) fits easily in a u64.
+        let mut table = [0u32; LEVELS as usize + 1];
+        for (o, t) in table.iter_mut().enumerate() {
+            *t = (16.0 * ((1.0 - s) * LEVELS as Real + s * o as Real) + 0.5) as u32;
+        }
         let len = self.segment_len();
-        let weight = |i: usize| w.get(i % len).copied().unwrap_or(0) as u64;
+        let weight = |i: usize| {
+            let o = w.get(i % len).copied().unwrap_or(0) as usize;
+            table.get(o).copied().unwrap_or(0) as u64
+        };
         for (j, (sq, q)) in self.sqrt_q.chunks_mut(len).zip(self.q.chunks(len)).enumerate() {
             let total: u64 = q.iter().enumerate().map(|(u, &q)| q as u64 * weight(j * len + u)).sum();
+            // One division per segment: `v = q · w · 2^16 / total` is
+            // `q · w · r / 2^24` with `r = 2^40 / total`, short of the exact
+            // quotient by under one unit (`q · w / 2^24 <= total / 2^24 < 1`),
+            // and at most 2^40 before the shift.
+            let r = (1u64 << 40).checked_div(total);
             for (u, (s, &q)) in sq.iter_mut().zip(q.iter()).enumerate() {
-                // A segment whose colours all belong to the surroundings keeps its plain roots.
-                let v = match (q as u64 * weight(j * len + u) * Q_ONE + total / 2).checked_div(total) {
-                    Some(v) => (v.min(u16::MAX as u64) as u32) << 8,
-                    None => (q as u32) << 8,
+                // A segment whose colours all have no weight keeps its plain roots.
+                let v = match r {
+                    Some(r) => ((q as u64 * weight(j * len + u) * r) >> 24).min(u16::MAX as u64) as u32,
+                    None => q as u32,
                 };
-                *s = crate::scalar::isqrt(v) as u16;
+                *s = crate::scalar::isqrt(v << 8) as u16;
             }
         }
         self.support = Support::of(&self.sqrt_q);
@@ -1364,6 +1388,41 @@ mod tests {
         assert_eq!(m, before, "alpha 0 leaves the model alone");
         m.blend(&Histogram::new(), 0.5);
         assert_eq!(m, before, "an empty observation leaves the model alone");
+    }
+
+    #[test]
+    fn reweighting_scales_each_bin_by_its_odds_at_the_given_strength() {
+        // Reason, by hand: half the model in bin 1, which the surroundings
+        // lack (odds 15 of 15), half in bin 2, which only they have (odds
+        // 0). At strength s a bin counts 1 − s + s · odds / 15 times, so the
+        // weighted model is (1, 1 − s) renormalised: at s = 0.5, 2/3 and
+        // 1/3, whose roots in units of 2^-12 are 3344.0 and 2364.9; at s = 1
+        // bin 2 drops out and bin 1 holds everything (root 4096, one unit
+        // less where the bin saturates); at s = 0 the plain roots, 2896.3.
+        let mut h = Histogram::<512>::new();
+        h.add(1, 100);
+        h.add(2, 100);
+        let mut odds = [8u8; 512];
+        (odds[1], odds[2]) = (15, 0);
+        let plain = Model::from_histogram(&h).unwrap();
+        let near = |got: u16, want: f64| (got as f64 - want).abs() <= 2.0;
+        for (s, want1, want2) in [(0.5, 3344.0, 2364.9), (1.0, 4096.0, 0.0), (0.0, 2896.3, 2896.3)] {
+            let mut m = plain.clone();
+            m.reweight(&odds, s);
+            assert!(near(m.sqrt_q[1], want1) && near(m.sqrt_q[2], want2), "s = {s}: {} {}", m.sqrt_q[1], m.sqrt_q[2]);
+            assert_eq!(m.q, plain.q, "the bins blended later stay unweighted");
+        }
+        // Blending short of the roots, then reweighting, is what blending
+        // and reweighting give: the roots `blend` computes are replaced.
+        let mut p = Histogram::<512>::new();
+        p.add(2, 50);
+        p.add(3, 50);
+        let (mut a, mut b) = (plain.clone(), plain.clone());
+        a.blend(&p, 0.3);
+        a.reweight(&odds, 0.5);
+        b.blend_bins(&p, 0.3);
+        b.reweight(&odds, 0.5);
+        assert_eq!(a, b);
     }
 
     #[test]

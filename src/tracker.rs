@@ -634,8 +634,8 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         }
         if cfg.uses_surroundings() {
             m.fg.learn(frame, &e, (&m.layout, &m.colour), 1.0, &mut sc.colour);
-            if cfg.weighted_model {
-                m.colour.reweight(m.fg.odds());
+            if cfg.background_weight > 0.0 {
+                m.colour.reweight(m.fg.odds(), cfg.background_weight);
             }
         }
         let models = &target.models;
@@ -988,7 +988,14 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         if updated {
             // The scratch still holds the estimate's histograms.
             let m = &mut target.models;
-            m.colour.blend(&scratch.colour, cfg.alpha);
+            // Weighted, the roots are recomputed below, against the
+            // surroundings blended in meanwhile.
+            let weighted = cfg.background_weight > 0.0;
+            if weighted {
+                m.colour.blend_bins(&scratch.colour, cfg.alpha);
+            } else {
+                m.colour.blend(&scratch.colour, cfg.alpha);
+            }
             if let Some(edge) = m.edge.as_mut() {
                 edge.blend(&scratch.edge, cfg.alpha);
             }
@@ -998,8 +1005,8 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             if cfg.uses_surroundings() {
                 // The estimate's histogram is blended in: its memory is free.
                 m.fg.learn(frame, &look.ellipse, (&m.layout, &m.colour), cfg.surroundings_rate, &mut scratch.colour);
-                if cfg.weighted_model {
-                    m.colour.reweight(m.fg.odds());
+                if weighted {
+                    m.colour.reweight(m.fg.odds(), cfg.background_weight);
                 }
             }
         }

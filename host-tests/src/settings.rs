@@ -48,7 +48,7 @@ pub const KEYS: &[(&str, &str)] = &[
         "shift",
         "off | STEP:ROUNDS:SIMILARITY:TEMPLATE (position hill-climbed against the surroundings, steps of STEP box sizes)",
     ),
-    ("weighted_model", "on | off (colour model weighted against the surroundings, CBWH)"),
+    ("background_weight", "0 to 1: colour model weighted against the surroundings (1: CBWH, 0: off)"),
 ];
 
 fn num(key: &str, v: &str) -> Result<f32, String> {
@@ -181,7 +181,6 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
         "lost_after" => c.lost_after = v.parse().map_err(|_| format!("lost_after: `{v}` is not a whole number"))?,
         "reseed_fraction" => c.reseed_fraction = num(key, v)?,
         "min_half_axis" => c.min_half_axis = num(key, v)?,
-        "weighted_model" => c.weighted_model = choice(key, v, &[("on", true), ("off", false)])?,
         "size" => {
             // (step, similarity, aspect searched, aspect pull, area pull)
             let (step, sim, aspect, ap, sp) = match v.split(':').collect::<Vec<_>>().as_slice() {
@@ -237,6 +236,7 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
         }
         "redetect" => c.redetect = choice(key, v, &[("on", true), ("off", false)])?,
         "surroundings_rate" => c.surroundings_rate = num(key, v)?,
+        "background_weight" => c.background_weight = num(key, v)?,
         _ => {
             let known: Vec<&str> = KEYS.iter().map(|(k, _)| *k).collect();
             return Err(format!("unknown setting `{key}`; known: {}", known.join(", ")));
@@ -272,7 +272,7 @@ mod tests {
                 "shift" => "0.1:2:1:0.5",
                 "life" => "appearance",
                 "redetect" => "on",
-                "weighted_model" => "on",
+                "background_weight" => "1",
                 "template" => "0.3:0.05",
                 _ => "0.07",
             };
