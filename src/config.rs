@@ -111,15 +111,10 @@ pub struct Config {
     /// Adaptation rate of the surroundings' colour histogram (see
     /// [`crate::foreground`]) on model-update frames, in `[0, 1]`.
     pub surroundings_rate: Real,
-    /// How strongly the colour model's bins are weighted by how much more
-    /// of each colour the target has than its surroundings, in `[0, 1]`:
-    /// bin `u` counts `1 − s + s · P(target | u)` times (see
-    /// [`crate::foreground`]), refreshed with the model. 1 is the
-    /// background-weighted histogram of CBWH (Ning et al. 2012), which
-    /// drops a colour the surroundings share even where it is the
-    /// target's own; 0.5 halves such a colour at most; 0 leaves the model
-    /// as learnt.
-    pub background_weight: Real,
+    /// The colour model's bins weighted by how much more of each colour the
+    /// target has than its surroundings (see [`BackgroundWeight`]), or
+    /// `None` to leave the model as learnt.
+    pub background_weight: Option<BackgroundWeight>,
     /// The grey-level template cue (see [`crate::template`]) in each
     /// particle's similarity, or `None`.
     pub template: Option<TemplateCue>,
@@ -220,6 +215,26 @@ pub struct ShiftSearch {
     /// a box from the same box a few pixels off on a target of one colour,
     /// the layout of light and dark can.
     pub template: Real,
+}
+
+/// How the colour model's bins are weighted against the surroundings (the
+/// background-weighted histograms of CBWH, Ning et al. 2012, generalised):
+/// bin `u` counts `1 − strength + strength · max(0, p(u) − above) / (1 −
+/// above)` times in the similarity, with `p(u)` = `P(target | u)` learnt
+/// against the ring around the target (see [`crate::foreground`]), and
+/// the model is renormalised. `{ strength: 1, above: 0 }` is CBWH: a colour
+/// the surroundings share is dropped even where it is the target's own.
+/// `above` > 0 weighs only the target's distinctive colours up: at
+/// `{ strength: 0.5, above: 0.8 }` a colour at least four times as common
+/// in the target as around it counts up to twice as much as the rest.
+/// Refreshed with the model.
+#[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BackgroundWeight {
+    /// In `[0, 1]`: 0 leaves the model as learnt.
+    pub strength: Real,
+    /// The odds `P(target | u)` above which a colour gains weight, in `[0, 0.95]`.
+    pub above: Real,
 }
 
 /// When the target model adapts (it never does with `alpha` = 0). Either
@@ -336,7 +351,7 @@ impl Default for Config {
             size: Some(SizeSearch { step: 0.02, similarity: 1.0, aspect: true, aspect_pull: 0.03, scale_pull: 0.05 }),
             shift: Some(ShiftSearch { step: 0.05, rounds: 1, similarity: 3.0, template: 0.15 }),
             surroundings_rate: 0.05,
-            background_weight: 0.0,
+            background_weight: None,
             template: None,
         }
     }
@@ -366,7 +381,7 @@ impl Config {
         self.life != Life::Appearance
             || self.size.is_some()
             || self.shift.is_some()
-            || self.background_weight > 0.0
+            || self.background_weight.is_some()
             || self.redetect
     }
 
@@ -474,7 +489,10 @@ impl Config {
             check("shift.template", s.template, 0.0, 10.0)?;
         }
         check("surroundings_rate", self.surroundings_rate, 0.0, 1.0)?;
-        check("background_weight", self.background_weight, 0.0, 1.0)?;
+        if let Some(b) = self.background_weight {
+            check("background_weight.strength", b.strength, 0.0, 1.0)?;
+            check("background_weight.above", b.above, 0.0, 0.95)?;
+        }
         Ok(())
     }
 }
@@ -491,7 +509,7 @@ mod tests {
     #[test]
     fn each_bad_field_is_named() {
         type Case = (fn(&mut Config), &'static str, ParamProblem);
-        let cases: [Case; 21] = [
+        let cases: [Case; 22] = [
             (|c| c.combination = Combination::Weighted { colour: 1.5 }, "combination.colour", ParamProblem::OutOfRange),
             (
                 |c| c.edges = Some(EdgeCue { bins: 7, threshold: 50, flat_bin: true }),
@@ -539,8 +557,21 @@ mod tests {
                 "shift.rounds",
                 ParamProblem::OutOfRange,
             ),
-            (|c| c.background_weight = 1.5, "background_weight", ParamProblem::OutOfRange),
-            (|c| c.background_weight = Real::NAN, "background_weight", ParamProblem::NonFinite),
+            (
+                |c| c.background_weight = Some(BackgroundWeight { strength: 1.5, above: 0.0 }),
+                "background_weight.strength",
+                ParamProblem::OutOfRange,
+            ),
+            (
+                |c| c.background_weight = Some(BackgroundWeight { strength: 0.5, above: 1.0 }),
+                "background_weight.above",
+                ParamProblem::OutOfRange,
+            ),
+            (
+                |c| c.background_weight = Some(BackgroundWeight { strength: Real::NAN, above: 0.0 }),
+                "background_weight.strength",
+                ParamProblem::NonFinite,
+            ),
         ];
         for (mutate, field, problem) in cases {
             let mut c = Config::default();

@@ -838,19 +838,23 @@ impl<const K: usize> Model<K> {
     }
 
     /// Weighs the model's bins by the odds `w` (`P(target | colour)` in
-    /// `0..=LEVELS` of [`crate::foreground`]) at `strength` `s` in `[0, 1]`:
-    /// the roots become those of `q(u) · (1 − s + s · w(u) / LEVELS)`,
-    /// renormalised per segment, while `q` itself stays unweighted for
-    /// blending (background-weighted histograms, CBWH, at `s` = 1).
-    pub(crate) fn reweight(&mut self, w: &[u8; K], strength: Real) {
+    /// `0..=LEVELS` of [`crate::foreground`]) as `b` says (see
+    /// [`crate::BackgroundWeight`]): the roots become those of the weighted
+    /// bins, renormalised per segment, while `q` itself stays unweighted for
+    /// blending.
+    pub(crate) fn reweight(&mut self, w: &[u8; K], b: crate::BackgroundWeight) {
         use crate::foreground::LEVELS;
-        let s = crate::scalar::clamp(strength, 0.0, 1.0);
-        // Sixteenths of `(1 − s) · LEVELS + s · o` for each odds level `o`:
-        // at most 16 · 15 = 240, so `q · weight` < 2^24 and a segment's sum
-        // (its q add up to about 2^16) fits easily in a u64.
+        let s = crate::scalar::clamp(b.strength, 0.0, 1.0);
+        let above = crate::scalar::clamp(b.above, 0.0, 0.95) * LEVELS as Real;
+        // Sixteenths of `LEVELS · (1 − s) + s · max(0, o − above) · LEVELS /
+        // (LEVELS − above)` for each odds level `o`: at most 16 · 15 = 240,
+        // so `q · weight` < 2^24 and a segment's sum (its q add up to about
+        // 2^16) fits easily in a u64.
         let mut table = [0u32; LEVELS as usize + 1];
+        let levels = LEVELS as Real;
         for (o, t) in table.iter_mut().enumerate() {
-            *t = (16.0 * ((1.0 - s) * LEVELS as Real + s * o as Real) + 0.5) as u32;
+            let gain = crate::scalar::max(o as Real - above, 0.0) * levels / (levels - above);
+            *t = (16.0 * ((1.0 - s) * levels + s * gain) + 0.5) as u32;
         }
         let len = self.segment_len();
         let weight = |i: usize| {
@@ -1391,7 +1395,7 @@ mod tests {
     }
 
     #[test]
-    fn reweighting_scales_each_bin_by_its_odds_at_the_given_strength() {
+    fn reweighting_scales_each_bin_by_its_odds_as_configured() {
         // Reason, by hand: half the model in bin 1, which the surroundings
         // lack (odds 15 of 15), half in bin 2, which only they have (odds
         // 0). At strength s a bin counts 1 − s + s · odds / 15 times, so the
@@ -1408,7 +1412,7 @@ mod tests {
         let near = |got: u16, want: f64| (got as f64 - want).abs() <= 2.0;
         for (s, want1, want2) in [(0.5, 3344.0, 2364.9), (1.0, 4096.0, 0.0), (0.0, 2896.3, 2896.3)] {
             let mut m = plain.clone();
-            m.reweight(&odds, s);
+            m.reweight(&odds, crate::BackgroundWeight { strength: s, above: 0.0 });
             assert!(near(m.sqrt_q[1], want1) && near(m.sqrt_q[2], want2), "s = {s}: {} {}", m.sqrt_q[1], m.sqrt_q[2]);
             assert_eq!(m.q, plain.q, "the bins blended later stay unweighted");
         }
@@ -1419,10 +1423,26 @@ mod tests {
         p.add(3, 50);
         let (mut a, mut b) = (plain.clone(), plain.clone());
         a.blend(&p, 0.3);
-        a.reweight(&odds, 0.5);
+        let half = crate::BackgroundWeight { strength: 0.5, above: 0.0 };
+        a.reweight(&odds, half);
         b.blend_bins(&p, 0.3);
-        b.reweight(&odds, 0.5);
+        b.reweight(&odds, half);
         assert_eq!(a, b);
+        // Above a threshold: bin 2 at odds 12 of 15. With `above` 0 it
+        // counts 0.5 + 0.5 · 12/15 = 0.9 against bin 1's 1, so 1/1.9 and
+        // 0.9/1.9 (roots 2971.6 and 2819.1); with `above` 0.8 (12 of 15)
+        // it gains nothing, 0.5 against 1: 2/3 and 1/3 again.
+        odds[2] = 12;
+        for (above, want1, want2) in [(0.0, 2971.6, 2819.1), (0.8, 3344.0, 2364.9)] {
+            let mut m = plain.clone();
+            m.reweight(&odds, crate::BackgroundWeight { strength: 0.5, above });
+            assert!(
+                near(m.sqrt_q[1], want1) && near(m.sqrt_q[2], want2),
+                "above {above}: {} {}",
+                m.sqrt_q[1],
+                m.sqrt_q[2]
+            );
+        }
     }
 
     #[test]

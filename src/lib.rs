@@ -85,7 +85,9 @@ mod testing;
 pub mod tracker;
 
 pub use colour::Binning;
-pub use config::{BoundaryCue, Config, EdgeCue, Life, ModelUpdate, ShiftSearch, SizeSearch, TableMode, TemplateCue};
+pub use config::{
+    BackgroundWeight, BoundaryCue, Config, EdgeCue, Life, ModelUpdate, ShiftSearch, SizeSearch, TableMode, TemplateCue,
+};
 pub use edges::{EdgeMap, EdgeParams};
 pub use error::{ChromaPlane, ConfigError, Error, FrameError, ParamProblem, RegionError};
 pub use filter::{Dynamics, Particle, Resampling};

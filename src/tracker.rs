@@ -634,8 +634,8 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         }
         if cfg.uses_surroundings() {
             m.fg.learn(frame, &e, (&m.layout, &m.colour), 1.0, &mut sc.colour);
-            if cfg.background_weight > 0.0 {
-                m.colour.reweight(m.fg.odds(), cfg.background_weight);
+            if let Some(b) = cfg.background_weight {
+                m.colour.reweight(m.fg.odds(), b);
             }
         }
         let models = &target.models;
@@ -990,8 +990,8 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             let m = &mut target.models;
             // Weighted, the roots are recomputed below, against the
             // surroundings blended in meanwhile.
-            let weighted = cfg.background_weight > 0.0;
-            if weighted {
+            let weighted = cfg.background_weight;
+            if weighted.is_some() {
                 m.colour.blend_bins(&scratch.colour, cfg.alpha);
             } else {
                 m.colour.blend(&scratch.colour, cfg.alpha);
@@ -1005,8 +1005,8 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             if cfg.uses_surroundings() {
                 // The estimate's histogram is blended in: its memory is free.
                 m.fg.learn(frame, &look.ellipse, (&m.layout, &m.colour), cfg.surroundings_rate, &mut scratch.colour);
-                if weighted {
-                    m.colour.reweight(m.fg.odds(), cfg.background_weight);
+                if let Some(b) = weighted {
+                    m.colour.reweight(m.fg.odds(), b);
                 }
             }
         }

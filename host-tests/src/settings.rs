@@ -48,7 +48,7 @@ pub const KEYS: &[(&str, &str)] = &[
         "shift",
         "off | STEP:ROUNDS:SIMILARITY:TEMPLATE (position hill-climbed against the surroundings, steps of STEP box sizes)",
     ),
-    ("background_weight", "0 to 1: colour model weighted against the surroundings (1: CBWH, 0: off)"),
+    ("background_weight", "STRENGTH[:ABOVE] | off (colour model weighted against the surroundings; 1 is CBWH)"),
 ];
 
 fn num(key: &str, v: &str) -> Result<f32, String> {
@@ -236,7 +236,14 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
         }
         "redetect" => c.redetect = choice(key, v, &[("on", true), ("off", false)])?,
         "surroundings_rate" => c.surroundings_rate = num(key, v)?,
-        "background_weight" => c.background_weight = num(key, v)?,
+        "background_weight" => {
+            c.background_weight = match v.split(':').collect::<Vec<_>>().as_slice() {
+                ["off"] => None,
+                [s] => Some(pftrack::BackgroundWeight { strength: num(key, s)?, above: 0.0 }),
+                [s, a] => Some(pftrack::BackgroundWeight { strength: num(key, s)?, above: num(key, a)? }),
+                _ => return Err(format!("{key}: expected STRENGTH[:ABOVE] or off, got {v:?}")),
+            }
+        }
         _ => {
             let known: Vec<&str> = KEYS.iter().map(|(k, _)| *k).collect();
             return Err(format!("unknown setting `{key}`; known: {}", known.join(", ")));

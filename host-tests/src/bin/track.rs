@@ -226,6 +226,7 @@ const VARIANTS: &[(&str, &[&str])] = &[
     ("surroundings: adapt at 0.02", &["surroundings_rate=0.02"]),
     ("colour: half background-weighted model", &["background_weight=0.5"]),
     ("colour: fully background-weighted model (CBWH)", &["background_weight=1"]),
+    ("colour: background-weighted, distinctive colours up to twice", &["background_weight=0.5:0.8"]),
     ("cues: + grey template, share 0.3", &["template=0.3:0.05"]),
     ("likelihood: adaptive σ, floor 0.02", &["adaptive_sigma=0.02:0.5"]),
     ("likelihood: σ from spread, 4 e-folds", &["spread_sigma=4:0.005:0.5"]),
