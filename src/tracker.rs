@@ -990,8 +990,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             let m = &mut target.models;
             // Weighted, the roots are recomputed below, against the
             // surroundings blended in meanwhile.
-            let weighted = cfg.background_weight;
-            if weighted.is_some() {
+            if cfg.background_weight.is_some() {
                 m.colour.blend_bins(&scratch.colour, cfg.alpha);
             } else {
                 m.colour.blend(&scratch.colour, cfg.alpha);
@@ -1005,9 +1004,9 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             if cfg.uses_surroundings() {
                 // The estimate's histogram is blended in: its memory is free.
                 m.fg.learn(frame, &look.ellipse, (&m.layout, &m.colour), cfg.surroundings_rate, &mut scratch.colour);
-                if let Some(b) = weighted {
-                    m.colour.reweight(m.fg.odds(), b);
-                }
+            }
+            if let Some(b) = cfg.background_weight {
+                m.colour.reweight(m.fg.odds(), b);
             }
         }
         if *state == TrackState::Tracking {
