@@ -226,8 +226,8 @@ pub struct ShiftSearch {
 /// the surroundings share is dropped even where it is the target's own.
 /// `above` > 0 weighs only the target's distinctive colours up: at
 /// `{ strength: 0.5, above: 0.8 }` a colour at least four times as common
-/// in the target as around it counts up to twice as much as the rest.
-/// Refreshed with the model.
+/// in the target as around it counts up to twice as much as the rest (the
+/// default). Refreshed with the model.
 #[derive(Copy, Clone, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct BackgroundWeight {
@@ -310,8 +310,10 @@ impl Default for Config {
     /// 100), a per-region budget of 500 samples, damped velocities with
     /// wide position noise, σ from the particles' spread, the size (pulled
     /// towards the first box's) and then the position (with the first grey
-    /// template's layout) searched against the surroundings, and the
-    /// confidence-driven life cycle.
+    /// template's layout) searched against the surroundings, the colour
+    /// model weighted towards the target's distinctive colours (strength
+    /// 0.5 above odds 0.8), and the confidence-driven life cycle (lost
+    /// below 0.6, found and learning above 0.8).
     fn default() -> Self {
         Config {
             binning: Binning::Rgb8x8x8,
@@ -346,12 +348,12 @@ impl Default for Config {
             lost_after: 3,
             reseed_fraction: 0.25,
             min_half_axis: 2.0,
-            life: Life::Confidence { lost_below: 0.5, found_above: 0.6 },
+            life: Life::Confidence { lost_below: 0.6, found_above: 0.8 },
             redetect: false,
             size: Some(SizeSearch { step: 0.02, similarity: 1.0, aspect: true, aspect_pull: 0.03, scale_pull: 0.05 }),
             shift: Some(ShiftSearch { step: 0.05, rounds: 1, similarity: 3.0, template: 0.15 }),
             surroundings_rate: 0.05,
-            background_weight: None,
+            background_weight: Some(BackgroundWeight { strength: 0.5, above: 0.8 }),
             template: None,
         }
     }
