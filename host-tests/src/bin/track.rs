@@ -177,7 +177,8 @@ enum Command {
         /// column for each split besides the overall one.
         #[arg(long)]
         split: Option<PathBuf>,
-        /// Also print every sequence's AUC per seed under each variant.
+        /// Also print every sequence's AUC per seed under each variant, and
+        /// how many of its missing frames were reported not tracking (per seed).
         #[arg(long)]
         per_sequence: bool,
         #[command(flatten)]
@@ -850,22 +851,22 @@ fn ablate(paths: &[PathBuf], opts: &AblateOpts<'_>, common: &Common) -> Result<(
         }
         if opts.per_sequence {
             for (k, seq) in seqs.iter().enumerate() {
-                let per: Vec<String> = jobs
-                    .iter()
-                    .zip(&cells)
-                    .filter(|((_, j), _)| *j == k)
-                    .map(|(_, c)| format!("{:.3}", c.auc))
-                    .collect();
+                let mine = || jobs.iter().zip(&cells).filter(move |((_, j), _)| *j == k).map(|(_, c)| c);
+                let per: Vec<String> = mine().map(|c| format!("{:.3}", c.auc)).collect();
+                // Where the pooled miss% comes from: reported of missing, per seed.
+                let flagged: Vec<String> =
+                    mine().map(|c| format!("{}/{}", c.aware.missing_flagged, c.aware.missing)).collect();
                 let group = match &opts.split {
                     Some(sp) if sp.tune.contains(&seq.name) => " (tune)",
                     Some(sp) if sp.check.contains(&seq.name) => " (check)",
                     _ => "",
                 };
                 println!(
-                    "|   {}{group} | seeds {} | {} |",
+                    "|   {}{group} | seeds {} | {} | missing frames reported {} |",
                     seq.name,
                     per.join(" / "),
-                    fmt3(mean_over(&indexed, &seqs, Some(std::slice::from_ref(&seq.name)), |c| c.auc))
+                    fmt3(mean_over(&indexed, &seqs, Some(std::slice::from_ref(&seq.name)), |c| c.auc)),
+                    flagged.join(" / "),
                 );
             }
         }
