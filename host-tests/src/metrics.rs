@@ -79,6 +79,29 @@ pub fn precision_curve(predicted: &[BoundingBox], truth: &[BoundingBox]) -> Opti
     Some((0..PRECISION_THRESHOLDS).map(|t| errs.iter().filter(|&&e| e <= t as f64).count() as f64 / n).collect())
 }
 
+/// Where a track's overlap is lost: its success AUC with each box given the
+/// truth's size about the tracker's centre, and with each box moved to the
+/// truth's centre at the tracker's size. The first minus the track's AUC is
+/// what sizing costs it, the second minus it what placing costs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Breakdown {
+    /// AUC with the truth's width and height at the tracker's centres.
+    pub true_size: f64,
+    /// AUC with the tracker's width and height at the truth's centres.
+    pub true_centre: f64,
+}
+
+/// The [`Breakdown`] of `predicted` against `truth` (frames without a
+/// target skipped); `None` if no frame can be scored.
+pub fn breakdown(predicted: &[BoundingBox], truth: &[BoundingBox]) -> Option<Breakdown> {
+    // A box of size (w, h) centred on (cx, cy).
+    let at = |(cx, cy): (f32, f32), w: f32, h: f32| BoundingBox::new(cx - w / 2.0, cy - h / 2.0, w, h);
+    let sized: Vec<BoundingBox> = predicted.iter().zip(truth).map(|(p, t)| at(p.centre(), t.width, t.height)).collect();
+    let placed: Vec<BoundingBox> =
+        predicted.iter().zip(truth).map(|(p, t)| at(t.centre(), p.width, p.height)).collect();
+    Some(Breakdown { true_size: score(&sized, truth)?.auc, true_centre: score(&placed, truth)?.auc })
+}
+
 /// IoU below which a frame counts as missing the target.
 pub const MISS_IOU: f64 = 0.1;
 
@@ -214,6 +237,23 @@ mod tests {
         assert!((s.auc - 10.0 / 21.0).abs() < 1e-12);
         assert_eq!(s.precision20, 0.5);
         assert!((centre_error(&pred[1], &truth[1]) - 30.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn breakdown_by_hand() {
+        // Reason: by hand. Frame 1 has the right centre at twice the size
+        // (IoU 1/4); frame 2 the right size 30 px off (IoU 0). With the
+        // truth's size, frame 1 becomes exact (above 20 of 21 thresholds)
+        // and frame 2 stays disjoint (none): (20/21 + 0) / 2. At the
+        // truth's centre, frame 2 becomes exact and frame 1 stays at IoU
+        // 1/4, above the thresholds 0, 0.05, ..., 0.2 (5 of 21): (5/21 +
+        // 20/21) / 2.
+        let truth = vec![BoundingBox::new(0.0, 0.0, 10.0, 10.0); 2];
+        let pred = vec![BoundingBox::new(-5.0, -5.0, 20.0, 20.0), BoundingBox::new(30.0, 0.0, 10.0, 10.0)];
+        let b = breakdown(&pred, &truth).unwrap();
+        assert!((b.true_size - 10.0 / 21.0).abs() < 1e-9, "{b:?}");
+        assert!((b.true_centre - 12.5 / 21.0).abs() < 1e-9, "{b:?}");
+        assert!(breakdown(&pred, &[BoundingBox::new(0.0, 0.0, 0.0, 0.0); 2]).is_none());
     }
 
     #[test]

@@ -59,3 +59,33 @@ fn bad_inputs_fail_clearly() {
     assert!(!ok && err.contains("alpha"), "{err}");
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[test]
+fn score_breaks_the_overlap_down_into_size_and_centre() {
+    // Reason: by hand, three frames of a 10x10 target at the origin: one
+    // exact box (IoU 1, above 20 of the 21 thresholds), one at the right
+    // centre twice the size (IoU 1/4, above 5: 0 to 0.2), one of the right
+    // size 30 px off (IoU 0, above none). AUC (20 + 5 + 0) / 63 = 0.397;
+    // with the truth's size the second becomes exact, (20 + 20 + 0) / 63 =
+    // 0.635; at the truth's centre the third does, (20 + 5 + 20) / 63 =
+    // 0.714.
+    let dir = std::env::temp_dir().join(format!("pftrack-cli-score-{}", std::process::id()));
+    std::fs::create_dir_all(dir.join("seq")).unwrap();
+    std::fs::create_dir_all(dir.join("res")).unwrap();
+    std::fs::write(dir.join("seq/groundtruth.txt"), "0,0,10,10\n0,0,10,10\n0,0,10,10\n").unwrap();
+    std::fs::write(dir.join("res/seq.txt"), "0,0,10,10\n-5,-5,20,20\n30,0,10,10\n").unwrap();
+    let results = format!("mine={}", dir.join("res").display());
+    let plots = dir.join("plots");
+    let (ok, stdout, stderr) = track(&[
+        "score",
+        "--truth",
+        dir.join("seq").to_str().unwrap(),
+        "--results",
+        &results,
+        "--plots",
+        plots.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("| mine | 0.397 | 0.635 (+0.238) | 0.714 (+0.317) |"), "{stdout}");
+    std::fs::remove_dir_all(dir).ok();
+}

@@ -3,7 +3,7 @@
 
 use clap::{Parser, Subcommand};
 use host_tests::fixture::Fixture;
-use host_tests::metrics::{Awareness, has_target, median, score};
+use host_tests::metrics::{Awareness, breakdown, has_target, median, score};
 use host_tests::otb;
 use host_tests::runner::{AnyTracker, Method, PARTICLES, Run, track_with};
 use host_tests::source::{FixtureStream, FrameSource, RawSpec, fixture_truth};
@@ -594,6 +594,8 @@ fn score_command(truth: &[PathBuf], results: &[String], plots: &Path, split: Opt
         let mut runs = Vec::new();
         let mut ms = Vec::new();
         let mut per_seq = vec![0.0; truths.len()];
+        // Means over sequences of the breakdown's two AUCs.
+        let mut breakdowns = (0.0, 0.0);
         for folder in &folders {
             for ((seq, t), acc) in truths.iter().zip(per_seq.iter_mut()) {
                 let boxes = read_boxes(&folder.join(format!("{seq}.txt")))?;
@@ -606,11 +608,15 @@ fn score_command(truth: &[PathBuf], results: &[String], plots: &Path, split: Opt
                     ms.push(v);
                 }
                 *acc += score(&boxes, t).map_or(0.0, |s| s.auc) / folders.len() as f64;
+                if let Some(b) = breakdown(&boxes, t) {
+                    let n = (folders.len() * truths.len()) as f64;
+                    (breakdowns.0, breakdowns.1) = (breakdowns.0 + b.true_size / n, breakdowns.1 + b.true_centre / n);
+                }
                 runs.push((boxes, t.clone()));
             }
         }
         let ms = (ms.len() == runs.len()).then(|| ms.iter().sum::<f64>() / ms.len() as f64);
-        sets.push((score_set(&name, &runs, ms)?, per_seq));
+        sets.push((score_set(&name, &runs, ms)?, per_seq, breakdowns));
     }
     let seqs: Vec<&str> = truths.iter().map(|(n, _)| n.as_str()).collect();
     println!("{} sequences: {}", seqs.len(), seqs.join(", "));
@@ -630,9 +636,9 @@ fn score_command(truth: &[PathBuf], results: &[String], plots: &Path, split: Opt
             println!("|---|---|---|---|");
         }
     }
-    let mut order: Vec<&(SetScore, Vec<f64>)> = sets.iter().collect();
+    let mut order: Vec<&(SetScore, Vec<f64>, (f64, f64))> = sets.iter().collect();
     order.sort_by(|a, b| b.0.auc.total_cmp(&a.0.auc));
-    for (r, per_seq) in order {
+    for (r, per_seq, _) in order.iter().copied() {
         let ms = r.ms.map(|m| format!("{m:.3}")).unwrap_or_else(|| "-".to_string());
         match split {
             Some(sp) => println!(
@@ -646,8 +652,19 @@ fn score_command(truth: &[PathBuf], results: &[String], plots: &Path, split: Opt
             None => println!("| {} | {:.3} | {:.3} | {ms} |", r.name, r.auc, r.p20),
         }
     }
+    println!();
+    println!(
+        "Where the overlap is lost (mean AUC over sequences, each box given the truth's size about its own centre, or moved to the truth's centre at its own size):"
+    );
+    println!();
+    println!("| tracker | mean AUC | with the truth's size | with the truth's centre |");
+    println!("|---|---|---|---|");
+    for (r, per_seq, (size, centre)) in order {
+        let auc = per_seq.iter().sum::<f64>() / per_seq.len().max(1) as f64;
+        println!("| {} | {auc:.3} | {size:.3} ({:+.3}) | {centre:.3} ({:+.3}) |", r.name, size - auc, centre - auc);
+    }
     std::fs::create_dir_all(plots).map_err(|e| format!("{}: {e}", plots.display()))?;
-    let sets: Vec<SetScore> = sets.into_iter().map(|(s, _)| s).collect();
+    let sets: Vec<SetScore> = sets.into_iter().map(|(s, _, _)| s).collect();
     draw_plots(&sets, plots, &format!("{} sequences", seqs.len()))
 }
 
