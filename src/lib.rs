@@ -76,6 +76,8 @@ pub mod geometry;
 pub mod histogram;
 pub mod likelihood;
 pub mod meanshift;
+#[cfg(feature = "scene-motion")]
+pub mod motion;
 pub mod region;
 pub mod scalar;
 pub(crate) mod table;

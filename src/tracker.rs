@@ -10,6 +10,8 @@ use crate::frame::Frame;
 use crate::geometry::{BoundingBox, Ellipse};
 use crate::histogram::{Clear, Histogram, Layout, Model};
 use crate::likelihood::gaussian;
+#[cfg(feature = "scene-motion")]
+use crate::motion::SceneMotion;
 use crate::region::{Extents, Lattice};
 use crate::scalar::{Real, exp, ln, normal_from_bits, sqrt, unit_from_bits};
 use crate::table::{Bins, Table};
@@ -437,6 +439,9 @@ pub struct Tracker<
     misses: u16,
     /// The signals behind the last confidence.
     diag: Diagnostics,
+    /// The estimate's motion against its surroundings.
+    #[cfg(feature = "scene-motion")]
+    motion: SceneMotion,
 }
 
 /// The signals behind the last step's confidence (see [`on_target`]), for
@@ -499,6 +504,8 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             state: TrackState::Searching,
             misses: 0,
             diag: Diagnostics::default(),
+            #[cfg(feature = "scene-motion")]
+            motion: SceneMotion::new(),
         })
     }
 
@@ -562,6 +569,8 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         self.weights = [1.0 / N as Real; N];
         self.state = TrackState::Tracking;
         self.misses = 0;
+        #[cfg(feature = "scene-motion")]
+        self.motion.start(frame, &e);
         Ok(Estimate::initialised(e, N as u16, self.config.likelihood.sigma_for(0.0)))
     }
 
@@ -579,6 +588,8 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         self.weights = [1.0 / N as Real; N];
         self.state = TrackState::Searching;
         self.misses = 0;
+        #[cfg(feature = "scene-motion")]
+        self.motion.start(frame, &Ellipse::from_box(&bbox));
         Ok(())
     }
 
@@ -714,7 +725,13 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         // the size: no search then.
         let sized = prior.is_some() || (T > 0 && self.config.table.is_some());
         let look = self.estimate(frame, &observed, !sized);
-        let event = self.life_cycle(look.found);
+        // Measured on every frame, so that its running means stay current.
+        #[cfg(feature = "scene-motion")]
+        let stuck =
+            self.config.scene_motion && self.motion.update(frame, &look.ellipse, self.state == TrackState::Tracking);
+        #[cfg(not(feature = "scene-motion"))]
+        let stuck = false;
+        let event = self.life_cycle(look.found && !stuck);
         let model_updated = self.adapt(frame, &look, event);
         Ok(Estimate {
             ellipse: look.ellipse,
@@ -1448,6 +1465,21 @@ mod tests {
                     problem: ParamProblem::NotBuilt { feature: "quadrants" }
                 })
             );
+        }
+    }
+
+    #[test]
+    fn the_surroundings_motion_test_needs_its_feature() {
+        // Reason: a build without the `scene-motion` feature has no such
+        // test; asking for it is an error naming the field and the feature.
+        let cfg = Config { scene_motion: true, ..Config::default() };
+        let got = Tracker::<10>::new(cfg, 1).err();
+        if cfg!(feature = "scene-motion") {
+            assert_eq!(got, None);
+        } else {
+            let want =
+                ConfigError { field: "scene_motion", problem: ParamProblem::NotBuilt { feature: "scene-motion" } };
+            assert_eq!(got, Some(Error::Config(want)));
         }
     }
 

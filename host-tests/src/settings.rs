@@ -42,6 +42,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ("template", "off | WEIGHT:RATE (grey template cue, NCC, share WEIGHT, adaptation RATE)"),
     ("life", "appearance | confidence:LOST:FOUND (what drives the tracking / lost states)"),
     ("redetect", "on | off (re-drawn particles go where the target's colours stand out while lost)"),
+    ("scene_motion", "on | off (a box that moves with its surroundings counts as a miss, for a target seen to move)"),
     ("size", "off | STEP:SIMILARITY:ASPECT_PULL:SCALE_PULL | STEP:SIMILARITY:scale:SCALE_PULL | STEP:SIMILARITY"),
     ("surroundings_rate", "adaptation rate of the surroundings' histogram"),
     (
@@ -235,6 +236,7 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
             }
         }
         "redetect" => c.redetect = choice(key, v, &[("on", true), ("off", false)])?,
+        "scene_motion" => c.scene_motion = choice(key, v, &[("on", true), ("off", false)])?,
         "surroundings_rate" => c.surroundings_rate = num(key, v)?,
         "background_weight" => {
             c.background_weight = match v.split(':').collect::<Vec<_>>().as_slice() {
@@ -279,6 +281,7 @@ mod tests {
                 "shift" => "0.1:2:1:0.5",
                 "life" => "appearance",
                 "redetect" => "on",
+                "scene_motion" => "on",
                 "background_weight" => "1",
                 "template" => "0.3:0.05",
                 _ => "0.07",
