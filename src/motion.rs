@@ -23,7 +23,7 @@
 //! frames of the two sequences where the box is left on the background and
 //! about 5% of frames on the target.
 
-use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Yuv422};
+use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565};
 use crate::geometry::Ellipse;
 use crate::scalar::{Real, sqrt};
 
@@ -124,34 +124,15 @@ impl Lattice {
 
     /// Calls `f(luma)` for each point, row by row (the window's middle left
     /// out), with its pixel shifted by `(dx, dy)`: `None` outside the frame.
-    /// Rows are read through [`PixelRead::pixels`] where the format allows,
-    /// one bounds test a row.
-    #[inline(always)]
-    fn read<P: PixelRead>(&self, frame: &Frame<'_>, (dx, dy): (i32, i32), mut f: impl FnMut(Option<u8>)) {
+    /// Any format, a pixel at a time (the searches' comparisons go through
+    /// [`sum_rows`] in the camera formats).
+    fn read(&self, frame: &Frame<'_>, (dx, dy): (i32, i32), mut f: impl FnMut(Option<u8>)) {
         for (j, &y) in self.ys.iter().enumerate() {
-            let cols = self.cols(j);
             let row = usize::try_from(y + dy).ok().and_then(|y| frame.row(y));
-            let px = row.and_then(P::pixels);
-            for &i in cols {
+            for &i in self.cols(j) {
                 let x = self.xs.get(i).and_then(|&x| usize::try_from(x + dx).ok());
-                let luma = match (px, row, x) {
-                    (Some(px), _, Some(x)) => px.get(x).map(|&p| P::px_luma(p)),
-                    (None, Some(row), Some(x)) => frame.luma_in(row, x),
-                    _ => None,
-                };
-                f(luma);
+                f(row.zip(x).and_then(|(row, x)| frame.luma_in(row, x)));
             }
-        }
-    }
-
-    /// [`Lattice::read`] in the frame's format.
-    #[inline(always)]
-    fn visit(&self, frame: &Frame<'_>, d: (i32, i32), f: impl FnMut(Option<u8>)) {
-        match frame.format() {
-            PixelFormat::Rgb565 => self.read::<Rgb565>(frame, d, f),
-            PixelFormat::Gray8 | PixelFormat::I420 | PixelFormat::Nv12 => self.read::<Gray8>(frame, d, f),
-            // The other formats read each pixel through the frame.
-            _ => self.read::<Yuv422>(frame, d, f),
         }
     }
 }
@@ -161,7 +142,7 @@ impl Lattice {
 fn sample(frame: &Frame<'_>, lattice: &Lattice, out: &mut [u8]) -> u64 {
     let (mut mask, mut bit) = (0u64, 1u64);
     let mut slots = out.iter_mut();
-    lattice.visit(frame, (0, 0), |luma| {
+    lattice.read(frame, (0, 0), |luma| {
         if let Some(v) = slots.next() {
             *v = luma.unwrap_or(0);
             if luma.is_some() {
@@ -186,7 +167,7 @@ fn difference(frame: &Frame<'_>, lattice: &Lattice, stored: &[u8], mask: u64, d:
         _ => {
             let (mut sum, mut n, mut bit) = (0u32, 0u32, 1u64);
             let mut samples = stored.iter();
-            lattice.read::<Yuv422>(frame, d, |luma| {
+            lattice.read(frame, d, |luma| {
                 if let (Some(l), Some(&s)) = (luma, samples.next())
                     && mask & bit != 0
                 {
