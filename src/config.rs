@@ -106,7 +106,7 @@ pub struct Config {
     /// a miss, for a target that moved against them over its first frames
     /// (the `motion` module, built with the `scene-motion` feature): a box
     /// left on the background by a panning camera is reported lost. Off by
-    /// default: it costs about 0.16 M instructions a QVGA frame on a
+    /// default: it costs about 0.15 M instructions a QVGA frame on a
     /// Cortex-M4F and, on the real sequences' tune split, reports no more of
     /// the missing frames (docs/accuracy.md).
     pub scene_motion: bool,

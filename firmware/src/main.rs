@@ -111,6 +111,8 @@ fn run() -> bool {
     let Some(ticks) = cortex_m::singleton!(: [u32; MAX_FRAMES] = [0; MAX_FRAMES]) else { fail!("buffer taken") };
     let made = match kind {
         "pf" => make_tracker(seed).map(|t| t.map(Any::Pf)),
+        #[cfg(feature = "all-options")]
+        "pf-motion" => make_motion_tracker(seed).map(|t| t.map(Any::Pf)),
         "meanshift" => make_meanshift(MeanShiftConfig::default()).map(|t| t.map(Any::MeanShift)),
         "kalman" => make_meanshift(MeanShiftConfig::kalman()).map(|t| t.map(Any::MeanShift)),
         _ => fail!("tracker `{kind}` is not pf, meanshift or kalman"),
@@ -207,6 +209,17 @@ fn run() -> bool {
 #[inline(never)]
 fn make_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
     let t = FwTracker::new(Config::default(), seed)?;
+    Ok(cortex_m::singleton!(: FwTracker = t))
+}
+
+/// [`make_tracker`] with the surroundings-motion test on, in the build with
+/// the core's optional techniques: a function of its own, so that each
+/// configuration is known at compile time and the default build's
+/// validation folds away as before.
+#[cfg(feature = "all-options")]
+#[inline(never)]
+fn make_motion_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
+    let t = FwTracker::new(Config { scene_motion: true, ..Config::default() }, seed)?;
     Ok(cortex_m::singleton!(: FwTracker = t))
 }
 
