@@ -77,7 +77,7 @@ pub mod histogram;
 pub mod likelihood;
 pub mod meanshift;
 #[cfg(feature = "scene-motion")]
-pub mod motion;
+pub(crate) mod motion;
 pub mod region;
 pub mod scalar;
 pub(crate) mod table;

@@ -9,11 +9,11 @@
 //! target moves against its ring. Each frame, [`SceneMotion`] reads the luma
 //! of the box on an 8 × 8 lattice and that of its surroundings on an 8 × 8
 //! lattice over twice the box, less the points inside the box (112
-//! samples). On the next frame it finds the whole-pixel shift, up
-//! to [`REACH`] pixels each way, at which each set best matches the new
-//! frame (least mean absolute difference, by a three-step search; the box's
-//! from the ring's), and keeps running means of the ring's
-//! motion and of the box's motion against the ring's.
+//! samples). On the next frame it finds the whole-pixel shift at which
+//! each set best matches the new frame (least mean absolute difference):
+//! the ring's from its last shift, in steps of 2 then 1 pixel (scenes move
+//! smoothly); the box's from the ring's, in unit steps. It keeps running
+//! means of the ring's motion and of the box's motion against the ring's.
 //!
 //! A static target filmed from a moving camera (a building from a drone)
 //! also moves with its surroundings, so the test applies only to a target
@@ -34,36 +34,33 @@ const BOX_POINTS: usize = GRID * GRID;
 /// Points of the window's lattice outside the box: the window's lattice
 /// is twice as coarse, so the box covers its middle half on each axis.
 const RING_POINTS: usize = GRID * GRID - (GRID / 2) * (GRID / 2);
-/// The largest shift the search reaches, in pixels each way (4 + 2 + 1).
-pub const REACH: i32 = 7;
 /// Tracked frames over which the target shows whether it moves against its
 /// surroundings.
-pub const EARLY: u16 = 20;
+pub(crate) const EARLY: u16 = 20;
 /// A box moving less than this against its ring, in pixels a frame (running
 /// mean), moves with it; a target that moved at least this much over its
 /// first frames is one that moves.
-pub const STILL: Real = 0.5;
+pub(crate) const STILL: Real = 0.5;
 /// A ring moving at least this much, in pixels a frame (running mean),
 /// tells a moving camera (or scene); with a still one there is nothing to
 /// compare.
-pub const MOVING: Real = 1.0;
+pub(crate) const MOVING: Real = 1.0;
 /// Weight of each frame in the running means (about the last ten frames).
 const RATE: Real = 0.2;
 
 /// The last frame's samples around the estimate and the running means of
 /// the motion measured from them.
 #[derive(Clone, Debug, PartialEq)]
-pub struct SceneMotion {
+pub(crate) struct SceneMotion {
     /// Luma of the box's lattice points, and which lay in the frame.
     inner: [u8; BOX_POINTS],
     inner_in: u64,
     /// Luma of the ring's lattice points, and which lay in the frame.
     outer: [u8; RING_POINTS],
     outer_in: u64,
-    /// The box they were read on.
-    at: Ellipse,
-    /// Whether samples were read.
-    read: bool,
+    /// The box they were read on, if any was (a box with no lattice is
+    /// not).
+    at: Option<Ellipse>,
     /// Running means: the box's motion against the ring's, and the ring's,
     /// in pixels a frame.
     against: Real,
@@ -75,12 +72,6 @@ pub struct SceneMotion {
     /// frames, and how many tracked frames were measured.
     early: Real,
     frames: u16,
-}
-
-impl Default for SceneMotion {
-    fn default() -> Self {
-        Self::new()
-    }
 }
 
 /// A lattice over a box: `GRID` pixel columns and rows, and whether the
@@ -226,9 +217,9 @@ fn sum_rows<P: PixelRead>(
 
 /// The whole-pixel shift at which `stored` best matches `frame`, searched
 /// from `start` with steps of the given sizes: at each step, the eight
-/// shifts that far around the best so far (a three-step search from no
-/// motion with steps 4, 2, 1 reaches [`REACH`] pixels with 25 comparisons
-/// instead of 225).
+/// shifts that far around the best so far (steps 2, 1 reach 3 pixels from
+/// `start` with 17 comparisons instead of 49); a unit step that finds no
+/// better neighbour ends the search.
 fn best_shift(
     frame: &Frame<'_>,
     lattice: &Lattice,
@@ -259,14 +250,13 @@ fn best_shift(
 
 impl SceneMotion {
     /// Nothing read, nothing measured.
-    pub const fn new() -> Self {
+    pub(crate) const fn new() -> Self {
         SceneMotion {
             inner: [0; BOX_POINTS],
             inner_in: 0,
             outer: [0; RING_POINTS],
             outer_in: 0,
-            at: Ellipse { cx: 0.0, cy: 0.0, hx: 0.0, hy: 0.0 },
-            read: false,
+            at: None,
             against: 0.0,
             ring: 0.0,
             last: (0, 0),
@@ -283,12 +273,12 @@ impl SceneMotion {
 
     fn read_at(&mut self, frame: &Frame<'_>, e: &Ellipse) {
         let (Some(inner), Some(outer)) = (Lattice::of(e, false), Lattice::of(e, true)) else {
-            self.read = false;
+            self.at = None;
             return;
         };
         self.inner_in = sample(frame, &inner, &mut self.inner);
         self.outer_in = sample(frame, &outer, &mut self.outer);
-        (self.at, self.read) = (*e, true);
+        self.at = Some(*e);
     }
 
     /// Measures how the last frame's box and ring moved into `frame`, folds
@@ -297,14 +287,14 @@ impl SceneMotion {
     /// next frame. Returns whether the estimate now moves with its
     /// surroundings (see [`SceneMotion::moves_with_surroundings`]).
     pub(crate) fn update(&mut self, frame: &Frame<'_>, e: &Ellipse, tracked: bool) -> bool {
-        if self.read {
-            // The ring's shift from no motion; the box's by unit steps from the
-            // ring's, at most three: a box moving further against its ring
-            // is not moving with it, whatever the exact figure.
-            let outer = Lattice::of(&self.at, true)
+        if let Some(at) = self.at {
+            // The ring's shift from its last one; the box's by unit steps from
+            // the ring's, at most three: a box moving further against its
+            // ring is not moving with it, whatever the exact figure.
+            let outer = Lattice::of(&at, true)
                 .and_then(|l| best_shift(frame, &l, (&self.outer, self.outer_in), self.last, &[2, 1]));
             let inner = outer.and_then(|r| {
-                let l = Lattice::of(&self.at, false)?;
+                let l = Lattice::of(&at, false)?;
                 best_shift(frame, &l, (&self.inner, self.inner_in), r, &[1, 1, 1])
             });
             self.last = outer.unwrap_or((0, 0));
@@ -333,14 +323,8 @@ impl SceneMotion {
     /// [`EARLY`] tracked frames is now estimated by a box that moves with a
     /// moving ring (running means: less than [`STILL`] against a ring moving
     /// at least [`MOVING`] pixels a frame).
-    pub fn moves_with_surroundings(&self) -> bool {
+    fn moves_with_surroundings(&self) -> bool {
         self.frames >= EARLY && self.early >= STILL * EARLY as Real && self.against < STILL && self.ring >= MOVING
-    }
-
-    /// The running means: the box's motion against its ring and the ring's
-    /// motion, in pixels a frame.
-    pub fn motion(&self) -> (Real, Real) {
-        (self.against, self.ring)
     }
 }
 
@@ -396,7 +380,7 @@ mod tests {
         let e = boxed((60, 50));
         m.start(&frame(&a), &e);
         assert!(!m.update(&frame(&b), &e, true));
-        let (against, ring) = m.motion();
+        let (against, ring) = (m.against, m.ring);
         assert_eq!(against, 0.0);
         assert!((ring - 13.0f32.sqrt()).abs() < 1e-6, "{ring}");
     }
@@ -468,6 +452,6 @@ mod tests {
         let nan = Ellipse { cx: Real::NAN, ..far };
         m.start(&frame(&a), &nan);
         assert!(!m.update(&frame(&a), &nan, true));
-        assert_eq!(m.motion(), (0.0, 0.0));
+        assert_eq!((m.against, m.ring), (0.0, 0.0));
     }
 }
