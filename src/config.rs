@@ -296,8 +296,17 @@ pub struct EdgeCue {
     /// Orientation bins over 0–180°: 2, 4, 8 or 16.
     pub bins: u8,
     /// Gradients with `sqrt(gx² + gy²)` below this are dropped (Sobel on 8-bit
-    /// grey levels, so strengths range up to about 1440).
+    /// grey levels, so strengths range up to about 1440). The largest
+    /// threshold a target gets: see `strong_percent`.
     pub threshold: u16,
+    /// The share of the first box's pixels, in percent, that should count as
+    /// edges. Where fewer reach `threshold`, that target's threshold is
+    /// lowered to the strength this share does reach (never below
+    /// [`MIN_EDGE_THRESHOLD`]; [`crate::Tracker::edge_threshold`] says what
+    /// was chosen). Magnification and blur spread an edge over more pixels
+    /// and weaken each one's gradient; a fixed threshold would then drop
+    /// them all and leave the cue blind. 0 keeps `threshold` fixed.
+    pub strong_percent: u8,
     /// Count the dropped weak pixels in one more bin, so that the histogram
     /// also measures how much of the region has edges. Without it, a flat
     /// patch with a few stray edges can match a textured target perfectly
@@ -305,6 +314,11 @@ pub struct EdgeCue {
     /// an empty background).
     pub flat_bin: bool,
 }
+
+/// The lowest threshold [`EdgeCue::strong_percent`] lowers to: a gradient
+/// of 10 is a step of about 2.5 grey levels, above the noise of a flat
+/// patch in a JPEG or a sensor's frame.
+pub const MIN_EDGE_THRESHOLD: u16 = 10;
 
 /// Capacity of an edge histogram: 16 orientation bins, the most an
 /// [`EdgeCue`] may ask for, plus the flat bin.
@@ -315,7 +329,8 @@ impl Default for Config {
     /// split and kept where the *check* split agrees (docs/accuracy.md):
     /// the first paper's filter (RGB 8x8x8, α = 0.1, π_T = 0.15) with the
     /// third paper's checkerboard and Sobel edge cue (8 bins, threshold
-    /// 100), a per-region budget of 500 samples, damped velocities with
+    /// 100, lowered for a target with fewer than 10% of its pixels that
+    /// strong), a per-region budget of 500 samples, damped velocities with
     /// wide position noise, σ from the particles' spread, the size (pulled
     /// towards the first box's) and then the position (with the first grey
     /// template's layout) searched against the surroundings, the colour
@@ -329,7 +344,7 @@ impl Default for Config {
             similarity: Similarity::Bhattacharyya,
             sampling: Sampling::Checkerboard,
             max_samples: 500,
-            edges: Some(EdgeCue { bins: 8, threshold: 100, flat_bin: false }),
+            edges: Some(EdgeCue { bins: 8, threshold: 100, flat_bin: false, strong_percent: 10 }),
             table: None,
             boundary: None,
             combination: Combination::Product,
@@ -433,6 +448,9 @@ impl Config {
             if e.threshold > 1500 {
                 return Err(ConfigError { field: "edges.threshold", problem: ParamProblem::OutOfRange });
             }
+            if e.strong_percent > 100 {
+                return Err(ConfigError { field: "edges.strong_percent", problem: ParamProblem::OutOfRange });
+            }
         }
         if let Some(t) = self.table {
             if !(1..=16).contains(&t.spacing) {
@@ -526,16 +544,21 @@ mod tests {
     #[test]
     fn each_bad_field_is_named() {
         type Case = (fn(&mut Config), &'static str, ParamProblem);
-        let cases: [Case; 22] = [
+        let cases: [Case; 23] = [
             (|c| c.combination = Combination::Weighted { colour: 1.5 }, "combination.colour", ParamProblem::OutOfRange),
             (
-                |c| c.edges = Some(EdgeCue { bins: 7, threshold: 50, flat_bin: true }),
+                |c| c.edges = Some(EdgeCue { bins: 7, threshold: 50, flat_bin: true, strong_percent: 10 }),
                 "edges.bins",
                 ParamProblem::OutOfRange,
             ),
             (
-                |c| c.edges = Some(EdgeCue { bins: 8, threshold: 9999, flat_bin: true }),
+                |c| c.edges = Some(EdgeCue { bins: 8, threshold: 9999, flat_bin: true, strong_percent: 10 }),
                 "edges.threshold",
+                ParamProblem::OutOfRange,
+            ),
+            (
+                |c| c.edges = Some(EdgeCue { bins: 8, threshold: 100, flat_bin: false, strong_percent: 101 }),
+                "edges.strong_percent",
                 ParamProblem::OutOfRange,
             ),
             (|c| c.likelihood.sigma = Sigma::Fixed(0.0), "likelihood.sigma", ParamProblem::OutOfRange),

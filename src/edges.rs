@@ -12,7 +12,9 @@
 //! it: bounded memory and cost, but a coarser edge cue.
 
 use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
-use crate::region::{Lattice, RowSpan, Sampling, div_small};
+use crate::config::MIN_EDGE_THRESHOLD;
+use crate::geometry::Ellipse;
+use crate::region::{Lattice, RowSpan, Sampling, div_small, for_each_row};
 
 /// Directions at `k · 11.25°` for `k = 0..16`, as `(cos, sin) · 4096`: the
 /// orientation bin boundaries for 2, 4, 8 or 16 bins over 0–180°.
@@ -628,6 +630,68 @@ impl<const E: usize> EdgeMap<E> {
     }
 }
 
+/// The edge threshold for the target in ellipse `e` of `frame` (see
+/// [`crate::EdgeCue::strong_percent`]): `threshold` if at least `percent`%
+/// of the ellipse's samples reach it, else the strength that `percent`%
+/// of them do reach, to a resolution of `threshold / 64` and never below
+/// [`MIN_EDGE_THRESHOLD`]. Samples are about 1024 pixels of the ellipse on
+/// a square lattice, where the 3x3 window fits in the frame; with none,
+/// or `percent` 0, `threshold`.
+pub(crate) fn soft_threshold(frame: &Frame<'_>, e: &Ellipse, threshold: u16, percent: u8) -> u16 {
+    const SAMPLES: usize = 1024;
+    const BINS: usize = 64;
+    if percent == 0 || threshold <= MIN_EDGE_THRESHOLD {
+        return threshold;
+    }
+    // Counts of strengths in [b·width, (b+1)·width) below the threshold, and
+    // of those at or above it.
+    let width = (threshold as u32).div_ceil(BINS as u32).max(1);
+    let (mut counts, mut strong, mut n) = ([0u16; BINS], 0u32, 0u32);
+    let area = 4.0 * e.hx * e.hy;
+    let step = if area > SAMPLES as crate::scalar::Real {
+        crate::scalar::sqrt(area / SAMPLES as crate::scalar::Real) as usize + 1
+    } else {
+        1
+    };
+    let (w, h) = (frame.width(), frame.height());
+    for_each_row(frame, e, Lattice::with_step(Sampling::Full, step), |span| {
+        let y = span.y;
+        if y == 0 || y + 1 >= h {
+            return;
+        }
+        for (x, _) in span {
+            if x == 0 || x + 1 >= w {
+                continue;
+            }
+            let mut p = [0i32; 9];
+            for (i, v) in p.iter_mut().enumerate() {
+                *v = frame.luma(x + i % 3 - 1, y + i / 3 - 1).unwrap_or(0) as i32;
+            }
+            let (gx, gy) = sobel(p);
+            // At most 1443 for 8-bit levels: the square fits in u32.
+            let m = (gx * gx + gy * gy).unsigned_abs().isqrt();
+            n += 1;
+            if m >= threshold as u32 {
+                strong += 1;
+            } else if let Some(c) = counts.get_mut((m / width) as usize) {
+                *c = c.saturating_add(1);
+            }
+        }
+    });
+    let wanted = percent as u32 * n;
+    if n == 0 || strong * 100 >= wanted {
+        return threshold;
+    }
+    let mut reach = strong;
+    for (b, &c) in counts.iter().enumerate().rev() {
+        reach += c as u32;
+        if reach * 100 >= wanted {
+            return ((b as u32 * width) as u16).max(MIN_EDGE_THRESHOLD);
+        }
+    }
+    MIN_EDGE_THRESHOLD
+}
+
 /// Sobel gradients of a 3x3 window given row by row (the centre is unused).
 /// `gx` is positive where brightness grows to the right, `gy` downwards.
 pub fn sobel(p: [i32; 9]) -> (i32, i32) {
@@ -640,9 +704,58 @@ pub fn sobel(p: [i32; 9]) -> (i32, i32) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::geometry::Ellipse;
     use crate::histogram::{Clear, Histogram};
     use crate::region::for_each_in_ellipse;
+
+    #[test]
+    fn a_target_with_weak_gradients_gets_the_strength_its_share_reaches() {
+        // Reason: by hand. Grey level 3·x: every pixel's Sobel gx is
+        // 4 · (3(x+1) − 3(x−1)) = 24 and gy is 0, so every sample has
+        // strength 24. The 64 bins below a threshold of 100 are 2 wide, so
+        // 24 is a bin edge and comes back exactly.
+        let (w, h) = (64, 48);
+        let ramp: Vec<u8> = (0..w * h).map(|i| (3 * (i % w)) as u8).collect();
+        let f = Frame::packed(&ramp, w, h, PixelFormat::Gray8).unwrap();
+        let e = Ellipse { cx: 32.0, cy: 24.0, hx: 20.0, hy: 15.0 };
+        assert_eq!(soft_threshold(&f, &e, 100, 10), 24, "none reach 100: lowered to what all reach");
+        assert_eq!(soft_threshold(&f, &e, 20, 10), 20, "all reach 20: kept");
+        assert_eq!(soft_threshold(&f, &e, 100, 0), 100, "0% keeps the threshold fixed");
+        // A flat patch has no strength at all: the floor.
+        let flat = vec![50u8; w * h];
+        let f = Frame::packed(&flat, w, h, PixelFormat::Gray8).unwrap();
+        assert_eq!(soft_threshold(&f, &e, 100, 10), MIN_EDGE_THRESHOLD);
+        // An ellipse off the frame has no samples: unchanged.
+        let off = Ellipse { cx: -100.0, cy: -100.0, hx: 5.0, hy: 5.0 };
+        assert_eq!(soft_threshold(&f, &off, 100, 10), 100);
+    }
+
+    #[test]
+    fn the_share_decides_whether_a_sharp_edge_keeps_the_threshold() {
+        // Reason: by hand. A vertical step from 0 to 100 at x = 32 gives
+        // strength 4 · 100 = 400 in columns 31 and 32 and 0 elsewhere. In a
+        // 41-px-wide ellipse on a 1-px lattice (area 41·21 < 1024 samples)
+        // those 2 columns are between 2/41 ≈ 5% of a full row and all of a
+        // row 1 or 2 px wide, and over the whole ellipse between 5% and 10%
+        // (counted below), so 3% keeps 100, and 20% drops to the floor: the
+        // rest of the samples have strength 0.
+        let (w, h) = (64, 32);
+        let step: Vec<u8> = (0..w * h).map(|i| if i % w >= 32 { 100 } else { 0 }).collect();
+        let f = Frame::packed(&step, w, h, PixelFormat::Gray8).unwrap();
+        let e = Ellipse { cx: 32.0, cy: 16.0, hx: 20.5, hy: 10.5 };
+        let (mut n, mut strong) = (0, 0);
+        for_each_row(&f, &e, Lattice::with_step(Sampling::Full, 1), |span| {
+            if span.y == 0 || span.y + 1 >= h {
+                return;
+            }
+            for (x, _) in span {
+                n += 1;
+                strong += (x == 31 || x == 32) as u32;
+            }
+        });
+        assert!(20 * strong > n && 10 * strong < n, "{strong} of {n}: the share is between 5% and 10%");
+        assert_eq!(soft_threshold(&f, &e, 100, 3), 100);
+        assert_eq!(soft_threshold(&f, &e, 100, 20), MIN_EDGE_THRESHOLD);
+    }
 
     #[test]
     fn sobel_on_a_hand_computed_patch() {

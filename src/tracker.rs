@@ -209,6 +209,9 @@ struct Target<const K: usize> {
     frame: (usize, usize),
     /// The appearance threshold on the colour ρ.
     threshold: Real,
+    /// The edge cue's gradient threshold for this target
+    /// ([`crate::EdgeCue::strong_percent`]).
+    edge_threshold: u16,
     /// Half axes to give particles re-drawn while searching.
     half_axes: (Real, Real),
     /// The initial box's half axes, which the size search is pulled towards.
@@ -337,10 +340,11 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
         frame: &Frame<'_>,
         rect: Option<(usize, usize, usize, usize)>,
         half_axes: (Real, Real),
+        edge_threshold: u16,
     ) {
         self.lattice = Lattice::new(cfg.sampling, cfg.max_samples, half_axes.0, half_axes.1);
         if let (Some(e), Some(rect)) = (cfg.edges, rect) {
-            self.map.compute_on(frame, rect, e.bins as usize, e.threshold, e.flat_bin, self.lattice);
+            self.map.compute_on(frame, rect, e.bins as usize, edge_threshold, e.flat_bin, self.lattice);
         }
     }
 }
@@ -557,6 +561,14 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         self.target.as_ref().map(|t| t.threshold)
     }
 
+    /// The edge cue's gradient threshold chosen for the target, once
+    /// initialised with the cue on: [`crate::EdgeCue::threshold`], or lower
+    /// for a target with fewer strong gradients than
+    /// [`crate::EdgeCue::strong_percent`] asks.
+    pub fn edge_threshold(&self) -> Option<u16> {
+        self.config.edges.and(self.target.as_ref().map(|t| t.edge_threshold))
+    }
+
     /// Learns the target from `bbox` in `frame` and starts tracking it there.
     ///
     /// Calling it again at any time re-initialises the tracker on a new box
@@ -607,7 +619,9 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         let segments = if cfg!(feature = "quadrants") && cfg.quadrants { 4 } else { 1 };
         #[cfg_attr(not(feature = "adaptive-bins"), allow(unused_mut))]
         let mut layout = Layout { segments, ..Layout::whole(cfg.binning) };
-        sc.prepare(cfg, frame, Some(cover(&e, fw, fh)), (e.hx, e.hy));
+        let edge_threshold =
+            cfg.edges.map_or(0, |c| crate::edges::soft_threshold(frame, &e, c.threshold, c.strong_percent));
+        sc.prepare(cfg, frame, Some(cover(&e, fw, fh)), (e.hx, e.hy), edge_threshold);
         #[cfg(feature = "adaptive-bins")]
         if cfg.binning == crate::colour::Binning::Adaptive {
             layout.levels = crate::bins::choose_levels(&mut sc.colour, frame, &e, sc.lattice, segments);
@@ -629,6 +643,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             },
             frame: (fw, fh),
             threshold: 0.0,
+            edge_threshold,
             half_axes: (e.hx.max(cfg.min_half_axis), e.hy.max(cfg.min_half_axis)),
             initial_axes: (e.hx.max(cfg.min_half_axis), e.hy.max(cfg.min_half_axis)),
             rho0: (0.0, 0),
@@ -654,7 +669,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         // Background similarity on a grid of target-sized regions that do not
         // touch the target: at most 8x8 of them, spaced at least one target
         // size apart.
-        sc.prepare(cfg, frame, Some((0, 0, fw, fh)), (e.hx, e.hy));
+        sc.prepare(cfg, frame, Some((0, 0, fw, fh)), (e.hx, e.hy), edge_threshold);
         let (fw, fh) = (fw as Real, fh as Real);
         let step_x = bbox.width.max(fw / 8.0);
         let step_y = bbox.height.max(fh / 8.0);
@@ -803,7 +818,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             }
             (x0, y0, x1, y1)
         });
-        scratch.prepare(cfg, frame, rect, target.half_axes);
+        scratch.prepare(cfg, frame, rect, target.half_axes, target.edge_threshold);
         // `T > 0` is known at compile time: without a table, none of its
         // code is built into the tracker (measured: 3.5 KB of Cortex-M4 code).
         if let Some(mode) = table {
@@ -1298,6 +1313,7 @@ fn uniform_particle<R: Rng>(rng: &mut R, width: usize, height: usize, hx: Real, 
 mod tests {
     use super::*;
     use crate::colour::Binning;
+    use crate::config::EdgeCue;
     use crate::frame::PixelFormat;
     use crate::histogram::Similarity;
 
@@ -1355,6 +1371,38 @@ mod tests {
         assert!(dx < 0.0 && (4.0 + dx).abs() <= 1.6, "dx {dx}");
         assert!(dy > 0.0 && (dy - 3.0).abs() <= 1.6, "dy {dy}");
         assert_eq!(search_shift(scratch, cfg, &f, models, &on, &shift, None).0, (0.0, 0.0));
+    }
+
+    #[test]
+    fn a_soft_target_keeps_its_edge_cue() {
+        // Reason: generated scene. The target is a checker of 4-px squares
+        // of grey 100 and 110 on a flat 100 background: its steps of 10 grey
+        // levels give Sobel strengths of at most 4·10·√2 ≈ 57, so no pixel
+        // reaches the default threshold of 100. With the threshold fixed the
+        // edge histogram is empty and the cue has no model; lowered to what
+        // 10% of the pixels reach, it is below 57 and the cue learns one.
+        let mut px = vec![100u8; W * H * 3];
+        for y in 29..61 {
+            for x in 44..76 {
+                if (x / 4 + y / 4) % 2 == 1 {
+                    px[(y * W + x) * 3..][..3].fill(110);
+                }
+            }
+        }
+        let f = frame(&px);
+        let fixed = EdgeCue { strong_percent: 0, ..Config::default().edges.unwrap() };
+        let mut t: Tracker<20> = Tracker::new(Config { edges: Some(fixed), ..Config::default() }, 1).unwrap();
+        t.init(&f, BOX).unwrap();
+        assert_eq!(t.edge_threshold(), Some(100));
+        assert!(t.edge_model().is_none(), "no gradient reaches 100");
+        let mut t: Tracker<20> = Tracker::new(Config::default(), 1).unwrap();
+        t.init(&f, BOX).unwrap();
+        let th = t.edge_threshold().unwrap();
+        assert!((crate::config::MIN_EDGE_THRESHOLD..=57).contains(&th), "threshold {th}");
+        assert!(t.edge_model().is_some(), "the lowered threshold keeps the texture's edges");
+        let mut t: Tracker<20> = Tracker::new(Config { edges: None, ..Config::default() }, 1).unwrap();
+        t.init(&f, BOX).unwrap();
+        assert_eq!(t.edge_threshold(), None, "no cue, no threshold");
     }
 
     #[test]

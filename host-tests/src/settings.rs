@@ -18,6 +18,10 @@ pub const KEYS: &[(&str, &str)] = &[
     ("model_update", "confident | degraded:C:FRAMES (update when confidence < C·ρ₀)"),
     ("max_samples", "most pixels read per region and cue, 0 = all"),
     ("edges", "off | BINS:THRESHOLD[:flat], e.g. 8:100:flat (flat: weak pixels get a bin)"),
+    (
+        "strong_percent",
+        "P: the edge threshold drops to what P% of the first box's pixels reach, if fewer reach it (0: fixed)",
+    ),
     ("combination", "product | weighted:W (W = colour weight)"),
     ("boundary", "off | W (ellipse-boundary gradient cue with share W)"),
     ("table", "off | SPACING (likelihood-table mode, grid spacing in px)"),
@@ -118,6 +122,13 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
                 return Err(format!("model_update: `{v}` is not confident or degraded:C:FRAMES"));
             }
         }
+        "strong_percent" => {
+            let p = v.parse().map_err(|_| format!("strong_percent: `{v}` is not a whole percentage"))?;
+            match c.edges.as_mut() {
+                Some(e) => e.strong_percent = p,
+                None => return Err("strong_percent: the edge cue is off".into()),
+            }
+        }
         "max_samples" => c.max_samples = v.parse().map_err(|_| format!("max_samples: `{v}` is not a whole number"))?,
         "edges" => {
             c.edges = if v == "off" {
@@ -135,6 +146,7 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
                     bins: b.parse().map_err(|_| format!("edges: `{b}` is not a bin count"))?,
                     threshold: t.parse().map_err(|_| format!("edges: `{t}` is not a threshold"))?,
                     flat_bin: flat.is_some(),
+                    strong_percent: c.edges.or(Config::default().edges).map_or(0, |e| e.strong_percent),
                 })
             }
         }
@@ -273,6 +285,7 @@ mod tests {
                 "table" => "2",
                 "max_samples" => "300",
                 "edges" => "4:60",
+                "strong_percent" => "20",
                 "combination" => "weighted:0.3",
                 "adaptive_sigma" => "0.1:0.3",
                 "spread_sigma" => "4:0.01:0.3",
