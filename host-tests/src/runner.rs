@@ -56,6 +56,9 @@ pub struct Run {
     /// Levels per colour channel of each histogram block, as chosen at
     /// initialisation (meaningful for adaptive binning; `None` for mean shift).
     pub colour_levels: Option<[u8; 4]>,
+    /// The edge cue's gradient threshold chosen at initialisation (`None`
+    /// without the cue, and for mean shift).
+    pub edge_threshold: Option<u16>,
     /// Every 4th particle's centre after each step (for pictures).
     pub particles: Vec<Vec<(f32, f32)>>,
     /// The particle filter's diagnostics after each step (empty for mean shift).
@@ -149,6 +152,10 @@ impl Run {
             step_ms: Vec::new(),
             threshold: tracker.threshold(),
             colour_levels: tracker.colour_levels(),
+            edge_threshold: match tracker {
+                AnyTracker::Pf(t) => t.edge_threshold(),
+                AnyTracker::MeanShift(..) => None,
+            },
             particles: Vec::new(),
             diagnostics: Vec::new(),
         }

@@ -242,6 +242,7 @@ const VARIANTS: &[(&str, &[&str])] = &[
     ("sampling: checkerboard, no budget", &["max_samples=0"]),
     ("cues: colour only", &["edges=off"]),
     ("cues: edges threshold 50", &["edges=8:50"]),
+    ("cues: edges threshold fixed, not lowered for a soft target", &["strong_percent=0"]),
     ("cues: edges with a flat bin", &["edges=8:100:flat"]),
     ("cues: weighted 0.5 instead of product", &["combination=weighted:0.5"]),
     ("colour: HSV 8x8x4", &["binning=hsv8x8x4"]),
@@ -387,6 +388,9 @@ fn row_of(name: &str, run: &Run, truth: &[BoundingBox]) -> Result<Row, String> {
 
 fn print_frames(truth: &[BoundingBox], run: &Run) {
     println!("appearance threshold: {:.3}", run.threshold);
+    if let Some(t) = run.edge_threshold {
+        println!("edge threshold: {t}");
+    }
     if let Some(l) = run.colour_levels {
         println!("colour levels per channel: {l:?} (the first for the whole ellipse; with quadrants, TL TR BL BR)");
     }
