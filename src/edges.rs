@@ -11,11 +11,11 @@
 //! 4th, … lattice row and column and a sample reads the cell at or before
 //! it: bounded memory and cost, but a coarser edge cue.
 
-use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
 use crate::config::MIN_EDGE_THRESHOLD;
+use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
 use crate::geometry::Ellipse;
-use crate::region::{Lattice, RowSpan, Sampling, div_small};
 use crate::region::floor;
+use crate::region::{Lattice, RowSpan, Sampling, div_small};
 use crate::scalar::{Real, isqrt, sqrt};
 
 /// Directions at `k · 11.25°` for `k = 0..16`, as `(cos, sin) · 4096`: the
@@ -654,7 +654,8 @@ pub(crate) fn soft_threshold(frame: &Frame<'_>, e: &Ellipse, threshold: u16, per
     let (mut counts, mut strong, mut n) = ([0u16; BINS], 0u32, 0u32);
     let area = 4.0 * e.hx * e.hy;
     // At least 1: `step_by` would panic on 0.
-    let step = if area > SAMPLES as Real { (sqrt(area / SAMPLES as Real) as usize).saturating_add(1) } else { 1 }.max(1);
+    let step =
+        if area > SAMPLES as Real { (sqrt(area / SAMPLES as Real) as usize).saturating_add(1) } else { 1 }.max(1);
     // The ellipse's pixels on a square lattice, where the 3x3 window fits.
     let (w, h) = (frame.width() as i32, frame.height() as i32);
     let (x0, x1) = (floor(e.cx - e.hx).max(1), floor(e.cx + e.hx).min(w - 2));
