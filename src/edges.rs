@@ -636,9 +636,10 @@ impl<const E: usize> EdgeMap<E> {
 /// [`crate::EdgeCue::strong_percent`]): `threshold` if at least `percent`%
 /// of the ellipse's samples reach it, else the strength that `percent`%
 /// of them do reach, to a resolution of `threshold / 64` and never below
-/// [`MIN_EDGE_THRESHOLD`]. Samples are about 1024 pixels of the ellipse on
-/// a square lattice, where the 3x3 window fits in the frame; with none,
-/// or `percent` 0, `threshold`.
+/// [`MIN_EDGE_THRESHOLD`]. Samples are the ellipse's pixels on a square
+/// lattice spaced so that its bounding box holds at most about 1024,
+/// where the 3x3 window fits in the frame; with none, or `percent` 0,
+/// `threshold`.
 // Once per target, so out of line and small rather than fast (measured:
 // 1.8 KB of Cortex-M4 code with the pixel reads inlined).
 #[inline(never)]
