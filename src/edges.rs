@@ -14,8 +14,7 @@
 use crate::config::MIN_EDGE_THRESHOLD;
 use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
 use crate::geometry::Ellipse;
-use crate::region::floor;
-use crate::region::{Lattice, RowSpan, Sampling, div_small};
+use crate::region::{Lattice, RowSpan, Sampling, div_small, floor};
 use crate::scalar::{Real, isqrt, sqrt};
 
 /// Directions at `k · 11.25°` for `k = 0..16`, as `(cos, sin) · 4096`: the

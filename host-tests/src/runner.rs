@@ -134,6 +134,15 @@ impl AnyTracker {
         }
     }
 
+    /// The edge cue's threshold chosen at initialisation (particle filter
+    /// with the cue only).
+    pub fn edge_threshold(&self) -> Option<u16> {
+        match self {
+            AnyTracker::Pf(t) => t.edge_threshold(),
+            AnyTracker::MeanShift(..) => None,
+        }
+    }
+
     /// The colour levels chosen at initialisation (particle filter only).
     pub fn colour_levels(&self) -> Option<[u8; 4]> {
         match self {
@@ -152,10 +161,7 @@ impl Run {
             step_ms: Vec::new(),
             threshold: tracker.threshold(),
             colour_levels: tracker.colour_levels(),
-            edge_threshold: match tracker {
-                AnyTracker::Pf(t) => t.edge_threshold(),
-                AnyTracker::MeanShift(..) => None,
-            },
+            edge_threshold: tracker.edge_threshold(),
             particles: Vec::new(),
             diagnostics: Vec::new(),
         }
