@@ -9,7 +9,11 @@ recipe: hue histogram of the initial box, masked to saturated, not-too-dark
 pixels). A tracker that reports failure keeps its last box, so every frame
 has one, as OTB's one-pass evaluation expects.
 
-Usage: opencv_trackers.py --out DIR SEQ_DIR...
+Usage: opencv_trackers.py --out DIR [--only NAMES] [--perturb DX,DY,SCALE] SEQ_DIR...
+
+--perturb starts every tracker from the first box moved by DX of its width
+and DY of its height and scaled by SCALE about its centre, as `track otb
+--perturb` does (OTB's spatial robustness evaluation).
 """
 import argparse
 import pathlib
@@ -30,6 +34,14 @@ def load_truth(seq):
         parts = [p for p in line.replace("\t", ",").replace(" ", ",").split(",") if p]
         rows.append(tuple(float(v) for v in parts[:4]))
     return rows
+
+
+def perturbed(box, dx, dy, scale):
+    """The first box changed as `track --perturb` changes it (host-tests otb::Perturb)."""
+    x, y, w, h = box
+    cx, cy = x + w * (0.5 + dx), y + h * (0.5 + dy)
+    w, h = w * scale, h * scale
+    return (cx - w / 2, cy - h / 2, w, h)
 
 
 def frames(seq):
@@ -67,6 +79,10 @@ class HueShift:
 
     def init(self, img, box):
         x, y, w, h = (int(round(v)) for v in box)
+        # A perturbed start may reach past the frame: take the part inside.
+        x0, y0 = max(x, 0), max(y, 0)
+        w, h = min(x + w, img.shape[1]) - x0, min(y + h, img.shape[0]) - y0
+        x, y = x0, y0
         hsv = cv2.cvtColor(img[y:y + h, x:x + w], cv2.COLOR_BGR2HSV)
         mask = cv2.inRange(hsv, np.array((0.0, 60.0, 32.0)), np.array((180.0, 255.0, 255.0)))
         self.hist = cv2.calcHist([hsv], [0], mask, [180], [0, 180])
@@ -104,8 +120,17 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--out", required=True, type=pathlib.Path)
     ap.add_argument("--only", help="comma-separated tracker names")
+    ap.add_argument("--perturb", metavar="DX,DY,SCALE", help="change the first box (see above)")
     ap.add_argument("seqs", nargs="+", type=pathlib.Path)
     args = ap.parse_args()
+    change = (0.0, 0.0, 1.0)
+    if args.perturb:
+        try:
+            change = tuple(float(v) for v in args.perturb.split(","))
+        except ValueError:
+            change = ()
+        if len(change) != 3 or not all(np.isfinite(change)) or change[2] <= 0:
+            sys.exit(f"error: --perturb `{args.perturb}` is not three numbers DX,DY,SCALE with SCALE above 0")
     names = args.only.split(",") if args.only else list(TRACKERS)
     unknown = [n for n in names if n not in TRACKERS]
     if unknown:
@@ -123,10 +148,11 @@ def main():
         images = [cv2.imread(str(p), cv2.IMREAD_COLOR) for p in paths]
         if any(img is None for img in images):
             sys.exit(f"error: {seq}: an image could not be decoded")
+        start = perturbed(truth[0], *change)
         for name in names:
             tracker = TRACKERS[name]()
-            tracker.init(images[0], truth[0])
-            boxes, times = [truth[0]], []
+            tracker.init(images[0], start)
+            boxes, times = [start], []
             for img in images[1:]:
                 t0 = time.perf_counter()
                 box = tracker.update(img)

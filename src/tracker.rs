@@ -551,9 +551,11 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
 
     /// Levels per colour channel of each histogram block (one per quadrant,
     /// or the first for the whole ellipse), as chosen at initialisation for
-    /// [`crate::Binning::Adaptive`]; `None` before initialisation.
+    /// [`crate::Binning::Adaptive`]; `None` before initialisation and with
+    /// a fixed binning (whose levels are not chosen).
     pub fn colour_levels(&self) -> Option<[u8; 4]> {
-        self.target.as_ref().map(|t| t.models.layout.levels)
+        let adaptive = self.config.binning == crate::Binning::Adaptive;
+        self.target.as_ref().filter(|_| adaptive).map(|t| t.models.layout.levels)
     }
 
     /// The appearance threshold learnt from the background, once initialised.

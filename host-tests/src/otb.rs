@@ -118,6 +118,49 @@ pub fn load(dir: &Path, mut progress: impl FnMut(usize, usize)) -> Result<Sequen
     Ok(Sequence { name, width, height, frames: decoded, truth })
 }
 
+/// A change to the first box a run starts from, as OTB's spatial
+/// robustness evaluation (SRE, Wu et al. 2013) makes: the box moves by
+/// `dx` of its width and `dy` of its height, and its width and height are
+/// multiplied by `scale` about its centre. Both trackers of a comparison
+/// start from the same changed box, so one lucky or unlucky start does not
+/// decide a sequence.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Perturb {
+    /// Shift right, in widths of the box.
+    pub dx: f32,
+    /// Shift down, in heights of the box.
+    pub dy: f32,
+    /// Factor on width and height, about the centre.
+    pub scale: f32,
+}
+
+impl Perturb {
+    /// The changed box.
+    pub fn apply(&self, b: &BoundingBox) -> BoundingBox {
+        let (cx, cy) = (b.x + b.width * (0.5 + self.dx), b.y + b.height * (0.5 + self.dy));
+        let (w, h) = (b.width * self.scale, b.height * self.scale);
+        BoundingBox::new(cx - w / 2.0, cy - h / 2.0, w, h)
+    }
+}
+
+impl std::str::FromStr for Perturb {
+    type Err = String;
+
+    /// `DX,DY,SCALE`, e.g. `0.1,0,1` or `0,0,0.8`.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let v: Vec<f32> = s
+            .split(',')
+            .map(|t| t.trim().parse::<f32>())
+            .collect::<Result<_, _>>()
+            .map_err(|_| format!("`{s}` is not three numbers DX,DY,SCALE"))?;
+        let [dx, dy, scale] = v[..] else { return Err(format!("`{s}` is not three numbers DX,DY,SCALE")) };
+        if !(dx.is_finite() && dy.is_finite() && scale.is_finite() && scale > 0.0) {
+            return Err(format!("`{s}`: shifts must be finite and the scale above 0"));
+        }
+        Ok(Perturb { dx, dy, scale })
+    }
+}
+
 /// The packed RGB888 bytes of an RGB888 frame.
 fn host_bytes(f: &pftrack::Frame<'_>) -> Vec<u8> {
     (0..f.height()).filter_map(|y| f.row(y)).flatten().copied().collect()
@@ -136,5 +179,20 @@ mod tests {
         assert!(parse_groundtruth("1,2,3\n").unwrap_err().contains("line 1"));
         assert!(parse_groundtruth("1,2,3,4\n1,2,x,4").unwrap_err().contains("line 2"));
         assert!(parse_groundtruth("").is_err());
+    }
+
+    #[test]
+    fn perturbed_start() {
+        // A 20x10 box at (100, 50): centre (110, 55).
+        let b = BoundingBox::new(100.0, 50.0, 20.0, 10.0);
+        // 10% of the width right and of the height up: centre (112, 54).
+        let p: Perturb = "0.1,-0.1,1".parse().unwrap();
+        assert_eq!(p.apply(&b), BoundingBox::new(102.0, 49.0, 20.0, 10.0));
+        // 0.8 of the size about the same centre: 16x8 at (102, 51).
+        let p: Perturb = "0,0,0.8".parse().unwrap();
+        assert_eq!(p.apply(&b), BoundingBox::new(102.0, 51.0, 16.0, 8.0));
+        assert!("0,0".parse::<Perturb>().is_err());
+        assert!("0,0,0".parse::<Perturb>().is_err());
+        assert!("nan,0,1".parse::<Perturb>().is_err());
     }
 }

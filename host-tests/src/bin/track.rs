@@ -54,6 +54,12 @@ struct Common {
     /// similarity (see `tools/fit-confidence`).
     #[arg(long)]
     dump: Option<PathBuf>,
+    /// Start from the first ground-truth box moved by DX of its width and
+    /// DY of its height and scaled by SCALE about its centre, e.g.
+    /// `--perturb 0.1,0,1` (OTB's spatial robustness evaluation; every
+    /// frame is still scored against the truth).
+    #[arg(long, value_name = "DX,DY,SCALE", allow_hyphen_values = true)]
+    perturb: Option<otb::Perturb>,
 }
 
 /// The options of `track run`.
@@ -273,6 +279,8 @@ struct Loaded {
     format: PixelFormat,
     frames: Vec<Vec<u8>>,
     truth: Vec<BoundingBox>,
+    /// The box a run starts from.
+    start: BoundingBox,
 }
 
 fn bar(len: usize, what: &str) -> ProgressBar {
@@ -286,14 +294,15 @@ fn bar(len: usize, what: &str) -> ProgressBar {
     b
 }
 
-fn load(path: &Path) -> Result<Loaded, String> {
+fn load(path: &Path, perturb: Option<otb::Perturb>) -> Result<Loaded, String> {
     if path.is_file() {
         let fx = Fixture::load(path)?;
         let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("fixture").to_string();
         // Frames where the target is entirely hidden or gone are not scored.
-        let truth =
+        let truth: Vec<BoundingBox> =
             fx.frames.iter().map(|f| if f.visible_permille == 0 { BoundingBox::default() } else { f.truth }).collect();
         let frames = fx.frames.into_iter().map(|f| f.pixels).collect();
+        let start = start_box(&name, &truth, perturb)?;
         return Ok(Loaded {
             name,
             width: fx.width,
@@ -302,6 +311,7 @@ fn load(path: &Path) -> Result<Loaded, String> {
             format: fx.format,
             frames,
             truth,
+            start,
         });
     }
     if !path.is_dir() {
@@ -315,7 +325,9 @@ fn load(path: &Path) -> Result<Loaded, String> {
     });
     pb.finish_and_clear();
     let seq = seq?;
+    let start = start_box(&seq.name, &seq.truth, perturb)?;
     Ok(Loaded {
+        start,
         name: seq.name,
         width: seq.width,
         height: seq.height,
@@ -348,7 +360,7 @@ fn evaluate(seq: &Loaded, method: Method, config: Config, seed: u64, quiet: bool
                 .map_err(|e| format!("{}: frame {}: {e}", seq.name, i + 1))
         })
         .collect::<Result<_, _>>()?;
-    let init = start_box(&seq.name, &seq.truth)?;
+    let init = seq.start;
     let pb = if quiet { ProgressBar::hidden() } else { bar(frames.len(), "track") };
     pb.set_prefix(seq.name.clone());
     let run = track_with(method, config, seed, &frames, init, |i, _| pb.set_position(i as u64))
@@ -357,13 +369,14 @@ fn evaluate(seq: &Loaded, method: Method, config: Config, seed: u64, quiet: bool
     Ok((row_of(&seq.name, &run, &seq.truth)?, run))
 }
 
-/// The first ground-truth box, if it has a target to start from.
-fn start_box(name: &str, truth: &[BoundingBox]) -> Result<BoundingBox, String> {
+/// The first ground-truth box, if it has a target to start from, changed by
+/// `perturb` if given.
+fn start_box(name: &str, truth: &[BoundingBox], perturb: Option<otb::Perturb>) -> Result<BoundingBox, String> {
     let init = *truth.first().ok_or_else(|| format!("{name}: no frames"))?;
     if !has_target(&init) {
         return Err(format!("{name}: the first ground-truth box has no target to start from"));
     }
-    Ok(init)
+    Ok(perturb.map_or(init, |p| p.apply(&init)))
 }
 
 /// A run's scores against the truth.
@@ -455,7 +468,7 @@ fn run_one(path: &Path, common: &Common) -> Result<(Row, Vec<BoundingBox>, Vec<B
         }
     };
     let first = frames.next_frame().map_err(|e| format!("{name}: {e}"))?.ok_or_else(|| format!("{name}: no frames"))?;
-    let init = start_box(&name, &truth)?;
+    let init = start_box(&name, &truth, common.perturb)?;
     let (mut tracker, _) = AnyTracker::start(common.tracker, common.config, common.seed, &first, init)
         .map_err(|e| format!("{name}: {e}"))?;
     picture(0, &first, None, &[]);
@@ -795,7 +808,7 @@ struct AblateOpts<'a> {
 }
 
 fn ablate(paths: &[PathBuf], opts: &AblateOpts<'_>, common: &Common) -> Result<(), String> {
-    let seqs: Vec<Loaded> = paths.iter().map(|p| load(p)).collect::<Result<_, _>>()?;
+    let seqs: Vec<Loaded> = paths.iter().map(|p| load(p, common.perturb)).collect::<Result<_, _>>()?;
     let seeds = opts.seeds;
     println!(
         "ablation over {} sequences, seeds 1..={seeds} (mean over seeds and sequences), {PARTICLES} particles; extra settings: {}",
