@@ -134,6 +134,36 @@ pub struct Perturb {
     pub scale: f32,
 }
 
+/// The twelve starts of OTB's spatial robustness evaluation: the box moved
+/// by a tenth of its width and/or height in eight directions (left, right,
+/// up, down, then the four corners), or scaled by 0.8, 0.9, 1.1 and 1.2.
+pub const SRE_STARTS: [Perturb; 12] = {
+    const fn p(dx: f32, dy: f32, scale: f32) -> Perturb {
+        Perturb { dx, dy, scale }
+    }
+    [
+        p(-0.1, 0.0, 1.0),
+        p(0.1, 0.0, 1.0),
+        p(0.0, -0.1, 1.0),
+        p(0.0, 0.1, 1.0),
+        p(-0.1, -0.1, 1.0),
+        p(0.1, -0.1, 1.0),
+        p(-0.1, 0.1, 1.0),
+        p(0.1, 0.1, 1.0),
+        p(0.0, 0.0, 0.8),
+        p(0.0, 0.0, 0.9),
+        p(0.0, 0.0, 1.1),
+        p(0.0, 0.0, 1.2),
+    ]
+};
+
+impl std::fmt::Display for Perturb {
+    /// As [`Perturb`] parses it: `DX,DY,SCALE`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{},{},{}", self.dx, self.dy, self.scale)
+    }
+}
+
 impl Perturb {
     /// The changed box.
     pub fn apply(&self, b: &BoundingBox) -> BoundingBox {
@@ -194,5 +224,9 @@ mod tests {
         assert!("0,0".parse::<Perturb>().is_err());
         assert!("0,0,0".parse::<Perturb>().is_err());
         assert!("nan,0,1".parse::<Perturb>().is_err());
+        // What `track starts` prints parses back to the same start.
+        for p in SRE_STARTS {
+            assert_eq!(p.to_string().parse::<Perturb>(), Ok(p));
+        }
     }
 }

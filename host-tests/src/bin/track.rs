@@ -58,8 +58,14 @@ struct Common {
     /// DY of its height and scaled by SCALE about its centre, e.g.
     /// `--perturb 0.1,0,1` (OTB's spatial robustness evaluation; every
     /// frame is still scored against the truth).
-    #[arg(long, value_name = "DX,DY,SCALE", allow_hyphen_values = true)]
+    #[arg(long, value_name = "DX,DY,SCALE", allow_hyphen_values = true, conflicts_with = "sre")]
     perturb: Option<otb::Perturb>,
+    /// (`ablate` only) Run every seed from each of the twelve changed first
+    /// boxes of OTB's spatial robustness evaluation (`track starts` lists
+    /// them) and average over all of them: a variant then cannot win by
+    /// one lucky start.
+    #[arg(long)]
+    sre: bool,
 }
 
 /// The options of `track run`.
@@ -165,6 +171,9 @@ enum Command {
         #[arg(long)]
         split: Option<PathBuf>,
     },
+    /// Prints the twelve changed first boxes of `ablate --sre`, one
+    /// DX,DY,SCALE per line, as `--perturb` takes them.
+    Starts,
     /// Runs each configuration variant of the ablation study over the
     /// sequences for several seeds and prints one markdown table of mean
     /// AUC, P20 and ms/frame.
@@ -350,7 +359,13 @@ struct Row {
 }
 
 /// Tracks one loaded sequence and scores it, with a progress bar unless `quiet`.
-fn evaluate(seq: &Loaded, method: Method, config: Config, seed: u64, quiet: bool) -> Result<(Row, Run), String> {
+fn evaluate(
+    seq: &Loaded,
+    method: Method,
+    config: Config,
+    (seed, start): (u64, Option<otb::Perturb>),
+    quiet: bool,
+) -> Result<(Row, Run), String> {
     let frames: Vec<Frame<'_>> = seq
         .frames
         .iter()
@@ -360,7 +375,7 @@ fn evaluate(seq: &Loaded, method: Method, config: Config, seed: u64, quiet: bool
                 .map_err(|e| format!("{}: frame {}: {e}", seq.name, i + 1))
         })
         .collect::<Result<_, _>>()?;
-    let init = seq.start;
+    let init = start.map_or(seq.start, |p| p.apply(&seq.start));
     let pb = if quiet { ProgressBar::hidden() } else { bar(frames.len(), "track") };
     pb.set_prefix(seq.name.clone());
     let run = track_with(method, config, seed, &frames, init, |i, _| pb.set_position(i as u64))
@@ -723,10 +738,19 @@ struct Cell {
     aware: Awareness,
 }
 
-/// Runs `jobs` (seed, sequence index) on every core, each with a fresh tracker.
+/// One run of an ablation: a seed, a sequence (its index), and a change to
+/// its first box.
+#[derive(Copy, Clone)]
+struct Job {
+    seed: u64,
+    seq: usize,
+    start: Option<otb::Perturb>,
+}
+
+/// Runs `jobs` on every core, each with a fresh tracker.
 fn run_jobs(
     seqs: &[Loaded],
-    jobs: &[(u64, usize)],
+    jobs: &[Job],
     method: Method,
     config: Config,
     pb: &ProgressBar,
@@ -741,9 +765,9 @@ fn run_jobs(
             scope.spawn(|| {
                 loop {
                     let i = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(&(seed, k)) = jobs.get(i) else { break };
+                    let Some(&Job { seed, seq: k, start }) = jobs.get(i) else { break };
                     let Some(seq) = seqs.get(k) else { break };
-                    let cell = evaluate(seq, method, config, seed, true).map(|(row, _)| Cell {
+                    let cell = evaluate(seq, method, config, (seed, start), true).map(|(row, _)| Cell {
                         auc: row.auc,
                         p20: row.p20,
                         ms: row.ms,
@@ -807,12 +831,19 @@ struct AblateOpts<'a> {
     per_sequence: bool,
 }
 
+/// The changes to the first box every seed runs from: none, or with
+/// `--sre` the twelve of [`otb::SRE_STARTS`].
+fn starts(sre: bool) -> Vec<Option<otb::Perturb>> {
+    if sre { otb::SRE_STARTS.iter().copied().map(Some).collect() } else { vec![None] }
+}
+
 fn ablate(paths: &[PathBuf], opts: &AblateOpts<'_>, common: &Common) -> Result<(), String> {
     let seqs: Vec<Loaded> = paths.iter().map(|p| load(p, common.perturb)).collect::<Result<_, _>>()?;
     let seeds = opts.seeds;
     println!(
-        "ablation over {} sequences, seeds 1..={seeds} (mean over seeds and sequences), {PARTICLES} particles; extra settings: {}",
+        "ablation over {} sequences, seeds 1..={seeds}{} (mean over runs and sequences), {PARTICLES} particles; extra settings: {}",
         seqs.len(),
+        if common.sre { ", each from the 12 first boxes of `track starts`" } else { "" },
         if common.set.is_empty() { "none".to_string() } else { common.set.join(" ") }
     );
     if let Some(sp) = &opts.split {
@@ -823,7 +854,7 @@ fn ablate(paths: &[PathBuf], opts: &AblateOpts<'_>, common: &Common) -> Result<(
     }
     println!();
     println!(
-        "miss%: missing frames (IoU < 0.1) reported not tracking; good%: good frames (IoU >= 0.3) reported not tracking; ROC: the confidence's ROC AUC, missing frames against the rest (frames pooled per seed, then averaged)"
+        "miss%: missing frames (IoU < 0.1) reported not tracking; good%: good frames (IoU >= 0.3) reported not tracking; ROC: the confidence's ROC AUC, missing frames against the rest (frames pooled per run, a seed or with --sre a seed and a start, then averaged)"
     );
     println!();
     let split_cols = opts.split.is_some();
@@ -846,17 +877,22 @@ fn ablate(paths: &[PathBuf], opts: &AblateOpts<'_>, common: &Common) -> Result<(
         config.validate().map_err(|e| format!("variant `{name}`: {e}"))?;
         // The mean-shift trackers draw no random numbers: one seed says all.
         let seeds_here = if method == Method::Pf { seeds } else { 1 };
-        let jobs: Vec<(u64, usize)> = (1..=seeds_here).flat_map(|s| (0..seqs.len()).map(move |k| (s, k))).collect();
+        let starts = starts(common.sre);
+        let runs: Vec<(u64, Option<otb::Perturb>)> =
+            (1..=seeds_here).flat_map(|s| starts.iter().map(move |&p| (s, p))).collect();
+        let jobs: Vec<Job> =
+            runs.iter().flat_map(|&(seed, start)| (0..seqs.len()).map(move |seq| Job { seed, seq, start })).collect();
         let pb = bar(jobs.len(), "ablate");
         pb.set_prefix(name.chars().take(12).collect::<String>());
         let cells = run_jobs(&seqs, &jobs, method, config, &pb)?;
         pb.finish_and_clear();
-        let indexed: Vec<(usize, &Cell)> = jobs.iter().map(|&(_, k)| k).zip(cells.iter()).collect();
-        // Awareness: frames pooled over sequences per seed, the rates averaged over seeds.
+        let indexed: Vec<(usize, &Cell)> = jobs.iter().map(|j| j.seq).zip(cells.iter()).collect();
+        // Awareness: frames pooled over sequences per run (seed and start),
+        // the rates averaged over runs.
         let (mut miss, mut good, mut roc) = (Vec::new(), Vec::new(), Vec::new());
-        for seed in 1..=seeds_here {
+        for &(seed, start) in &runs {
             let mut pooled = Awareness::default();
-            for (_, c) in jobs.iter().zip(&cells).filter(|((s, _), _)| *s == seed) {
+            for (_, c) in jobs.iter().zip(&cells).filter(|(j, _)| j.seed == seed && j.start == start) {
                 pooled.merge(&c.aware);
             }
             miss.extend(pooled.missing_reported());
@@ -886,11 +922,24 @@ fn ablate(paths: &[PathBuf], opts: &AblateOpts<'_>, common: &Common) -> Result<(
         }
         if opts.per_sequence {
             for (k, seq) in seqs.iter().enumerate() {
-                let mine = || jobs.iter().zip(&cells).filter(move |((_, j), _)| *j == k).map(|(_, c)| c);
-                let per: Vec<String> = mine().map(|c| format!("{:.3}", c.auc)).collect();
-                // Where the pooled miss% comes from: reported of missing, per seed.
-                let flagged: Vec<String> =
-                    mine().map(|c| format!("{}/{}", c.aware.missing_flagged, c.aware.missing)).collect();
+                // Per seed (over its starts with --sre): the mean AUC, and
+                // where the pooled miss% comes from, reported of missing.
+                let mine = |seed: u64| {
+                    jobs.iter().zip(&cells).filter(move |(j, _)| j.seq == k && j.seed == seed).map(|(_, c)| c)
+                };
+                let per: Vec<String> = (1..=seeds_here)
+                    .map(|s| {
+                        let (sum, n) = mine(s).fold((0.0, 0), |(a, n), c| (a + c.auc, n + 1));
+                        format!("{:.3}", sum / n.max(1) as f64)
+                    })
+                    .collect();
+                let flagged: Vec<String> = (1..=seeds_here)
+                    .map(|s| {
+                        let (f, m) =
+                            mine(s).fold((0, 0), |(f, m), c| (f + c.aware.missing_flagged, m + c.aware.missing));
+                        format!("{f}/{m}")
+                    })
+                    .collect();
                 let group = match &opts.split {
                     Some(sp) if sp.tune.contains(&seq.name) => " (tune)",
                     Some(sp) if sp.check.contains(&seq.name) => " (check)",
@@ -946,6 +995,12 @@ fn main() -> ExitCode {
                 }
             };
         }
+        Command::Starts => {
+            for p in otb::SRE_STARTS {
+                println!("{p}");
+            }
+            return ExitCode::SUCCESS;
+        }
         Command::Otb { seqs, common } => (seqs, common, None),
         Command::Fixture { files, common } => (files, common, None),
         Command::Ablate { seqs, seeds, only, split, per_sequence, common } => {
@@ -960,6 +1015,10 @@ fn main() -> ExitCode {
     }
     if let Err(e) = common.config.validate() {
         eprintln!("error: {e}");
+        return ExitCode::FAILURE;
+    }
+    if common.sre && ablation.is_none() {
+        eprintln!("error: --sre is for `track ablate`; `track otb --perturb DX,DY,SCALE` runs one start");
         return ExitCode::FAILURE;
     }
     if let Some((seeds, only, split, per_sequence)) = ablation {
