@@ -58,14 +58,8 @@ struct Common {
     /// DY of its height and scaled by SCALE about its centre, e.g.
     /// `--perturb 0.1,0,1` (OTB's spatial robustness evaluation; every
     /// frame is still scored against the truth).
-    #[arg(long, value_name = "DX,DY,SCALE", allow_hyphen_values = true, conflicts_with = "sre")]
+    #[arg(long, value_name = "DX,DY,SCALE", allow_hyphen_values = true)]
     perturb: Option<otb::Perturb>,
-    /// (`ablate` only) Run every seed from each of the twelve changed first
-    /// boxes of OTB's spatial robustness evaluation (`track starts` lists
-    /// them) and average over all of them: a variant then cannot win by
-    /// one lucky start.
-    #[arg(long)]
-    sre: bool,
 }
 
 /// The options of `track run`.
@@ -196,6 +190,12 @@ enum Command {
         /// how many of its missing frames were reported not tracking (per seed).
         #[arg(long)]
         per_sequence: bool,
+        /// Run every seed from each of the twelve changed first boxes of
+        /// OTB's spatial robustness evaluation (`track starts` lists them)
+        /// and average over all of them: a variant then cannot win by one
+        /// lucky start.
+        #[arg(long, conflicts_with = "perturb")]
+        sre: bool,
         #[command(flatten)]
         common: Common,
     },
@@ -288,8 +288,6 @@ struct Loaded {
     format: PixelFormat,
     frames: Vec<Vec<u8>>,
     truth: Vec<BoundingBox>,
-    /// The box a run starts from.
-    start: BoundingBox,
 }
 
 fn bar(len: usize, what: &str) -> ProgressBar {
@@ -303,15 +301,14 @@ fn bar(len: usize, what: &str) -> ProgressBar {
     b
 }
 
-fn load(path: &Path, perturb: Option<otb::Perturb>) -> Result<Loaded, String> {
+fn load(path: &Path) -> Result<Loaded, String> {
     if path.is_file() {
         let fx = Fixture::load(path)?;
         let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("fixture").to_string();
         // Frames where the target is entirely hidden or gone are not scored.
-        let truth: Vec<BoundingBox> =
+        let truth =
             fx.frames.iter().map(|f| if f.visible_permille == 0 { BoundingBox::default() } else { f.truth }).collect();
         let frames = fx.frames.into_iter().map(|f| f.pixels).collect();
-        let start = start_box(&name, &truth, perturb)?;
         return Ok(Loaded {
             name,
             width: fx.width,
@@ -320,7 +317,6 @@ fn load(path: &Path, perturb: Option<otb::Perturb>) -> Result<Loaded, String> {
             format: fx.format,
             frames,
             truth,
-            start,
         });
     }
     if !path.is_dir() {
@@ -334,9 +330,7 @@ fn load(path: &Path, perturb: Option<otb::Perturb>) -> Result<Loaded, String> {
     });
     pb.finish_and_clear();
     let seq = seq?;
-    let start = start_box(&seq.name, &seq.truth, perturb)?;
     Ok(Loaded {
-        start,
         name: seq.name,
         width: seq.width,
         height: seq.height,
@@ -375,7 +369,7 @@ fn evaluate(
                 .map_err(|e| format!("{}: frame {}: {e}", seq.name, i + 1))
         })
         .collect::<Result<_, _>>()?;
-    let init = start.map_or(seq.start, |p| p.apply(&seq.start));
+    let init = start_box(&seq.name, &seq.truth, start)?;
     let pb = if quiet { ProgressBar::hidden() } else { bar(frames.len(), "track") };
     pb.set_prefix(seq.name.clone());
     let run = track_with(method, config, seed, &frames, init, |i, _| pb.set_position(i as u64))
@@ -829,21 +823,23 @@ struct AblateOpts<'a> {
     only: Option<&'a str>,
     split: Option<Split>,
     per_sequence: bool,
+    /// Every seed runs from each of [`otb::SRE_STARTS`].
+    sre: bool,
 }
 
-/// The changes to the first box every seed runs from: none, or with
-/// `--sre` the twelve of [`otb::SRE_STARTS`].
-fn starts(sre: bool) -> Vec<Option<otb::Perturb>> {
-    if sre { otb::SRE_STARTS.iter().copied().map(Some).collect() } else { vec![None] }
+/// The changes to the first box every seed runs from: the twelve of
+/// [`otb::SRE_STARTS`] with `--sre`, else `--perturb`'s (or none).
+fn starts(sre: bool, perturb: Option<otb::Perturb>) -> Vec<Option<otb::Perturb>> {
+    if sre { otb::SRE_STARTS.iter().copied().map(Some).collect() } else { vec![perturb] }
 }
 
 fn ablate(paths: &[PathBuf], opts: &AblateOpts<'_>, common: &Common) -> Result<(), String> {
-    let seqs: Vec<Loaded> = paths.iter().map(|p| load(p, common.perturb)).collect::<Result<_, _>>()?;
+    let seqs: Vec<Loaded> = paths.iter().map(|p| load(p)).collect::<Result<_, _>>()?;
     let seeds = opts.seeds;
     println!(
         "ablation over {} sequences, seeds 1..={seeds}{} (mean over runs and sequences), {PARTICLES} particles; extra settings: {}",
         seqs.len(),
-        if common.sre { ", each from the 12 first boxes of `track starts`" } else { "" },
+        if opts.sre { ", each from the 12 first boxes of `track starts`" } else { "" },
         if common.set.is_empty() { "none".to_string() } else { common.set.join(" ") }
     );
     if let Some(sp) = &opts.split {
@@ -877,7 +873,7 @@ fn ablate(paths: &[PathBuf], opts: &AblateOpts<'_>, common: &Common) -> Result<(
         config.validate().map_err(|e| format!("variant `{name}`: {e}"))?;
         // The mean-shift trackers draw no random numbers: one seed says all.
         let seeds_here = if method == Method::Pf { seeds } else { 1 };
-        let starts = starts(common.sre);
+        let starts = starts(opts.sre, common.perturb);
         let runs: Vec<(u64, Option<otb::Perturb>)> =
             (1..=seeds_here).flat_map(|s| starts.iter().map(move |&p| (s, p))).collect();
         let jobs: Vec<Job> =
@@ -1003,8 +999,8 @@ fn main() -> ExitCode {
         }
         Command::Otb { seqs, common } => (seqs, common, None),
         Command::Fixture { files, common } => (files, common, None),
-        Command::Ablate { seqs, seeds, only, split, per_sequence, common } => {
-            (seqs, common, Some((seeds, only, split, per_sequence)))
+        Command::Ablate { seqs, seeds, only, split, per_sequence, sre, common } => {
+            (seqs, common, Some((seeds, only, split, per_sequence, sre)))
         }
     };
     for s in &common.set {
@@ -1017,11 +1013,7 @@ fn main() -> ExitCode {
         eprintln!("error: {e}");
         return ExitCode::FAILURE;
     }
-    if common.sre && ablation.is_none() {
-        eprintln!("error: --sre is for `track ablate`; `track otb --perturb DX,DY,SCALE` runs one start");
-        return ExitCode::FAILURE;
-    }
-    if let Some((seeds, only, split, per_sequence)) = ablation {
+    if let Some((seeds, only, split, per_sequence, sre)) = ablation {
         let split = match split.as_deref().map(Split::load).transpose() {
             Ok(s) => s,
             Err(e) => {
@@ -1029,7 +1021,7 @@ fn main() -> ExitCode {
                 return ExitCode::FAILURE;
             }
         };
-        let opts = AblateOpts { seeds, only: only.as_deref(), split, per_sequence };
+        let opts = AblateOpts { seeds, only: only.as_deref(), split, per_sequence, sre };
         return match ablate(&paths, &opts, &common) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
