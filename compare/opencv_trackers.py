@@ -83,6 +83,8 @@ class HueShift:
         x0, y0 = max(x, 0), max(y, 0)
         w, h = min(x + w, img.shape[1]) - x0, min(y + h, img.shape[0]) - y0
         x, y = x0, y0
+        if w <= 0 or h <= 0:
+            raise ValueError("the first box is outside the frame")
         hsv = cv2.cvtColor(img[y:y + h, x:x + w], cv2.COLOR_BGR2HSV)
         mask = cv2.inRange(hsv, np.array((0.0, 60.0, 32.0)), np.array((180.0, 255.0, 255.0)))
         self.hist = cv2.calcHist([hsv], [0], mask, [180], [0, 180])
@@ -151,7 +153,10 @@ def main():
         start = perturbed(truth[0], *change)
         for name in names:
             tracker = TRACKERS[name]()
-            tracker.init(images[0], start)
+            try:
+                tracker.init(images[0], start)
+            except (ValueError, cv2.error) as e:
+                sys.exit(f"error: {seq}: {name} cannot start from {start}: {e}")
             boxes, times = [start], []
             for img in images[1:]:
                 t0 = time.perf_counter()
