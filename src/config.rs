@@ -331,7 +331,8 @@ impl Default for Config {
     /// third paper's checkerboard and Sobel edge cue (8 bins, threshold
     /// 100, lowered for a target with fewer than 10% of its pixels that
     /// strong), a per-region budget of 500 samples, damped velocities with
-    /// wide position noise, σ from the particles' spread, the size (pulled
+    /// wide position noise (a fifth of the target's size, or its recent
+    /// speed if that is more), σ from the particles' spread, the size (pulled
     /// towards the first box's) and then the position (with the first grey
     /// template's layout) searched against the surroundings, the colour
     /// model weighted towards the target's distinctive colours (strength
@@ -358,6 +359,7 @@ impl Default for Config {
                 position_noise: 0.2,
                 velocity_noise: 0.1,
                 velocity_decay: 0.5,
+                speed_noise: 1.0,
                 scale_noise: 0.01,
                 scale_rate_noise: 0.0,
             },
@@ -472,6 +474,7 @@ impl Config {
         check("dynamics.position_noise", d.position_noise, 0.0, 10.0)?;
         check("dynamics.velocity_noise", d.velocity_noise, 0.0, 10.0)?;
         check("dynamics.velocity_decay", d.velocity_decay, 0.0, 1.0)?;
+        check("dynamics.speed_noise", d.speed_noise, 0.0, 10.0)?;
         check("dynamics.scale_noise", d.scale_noise, 0.0, 0.5)?;
         check("dynamics.scale_rate_noise", d.scale_rate_noise, 0.0, 0.1)?;
         if self.scene_motion && !cfg!(feature = "scene-motion") {

@@ -56,6 +56,12 @@ pub struct Dynamics {
     /// lets a velocity that resampling once favoured fade instead of carrying
     /// the particle off when the target stops or turns.
     pub velocity_decay: Real,
+    /// Standard deviation of extra position noise per pixel a frame of the
+    /// target's recent speed (the estimate's smoothed displacement). A fast
+    /// target's next position is less certain than a slow one's, and a
+    /// noise scaled to its size alone leaves a target that moves more than
+    /// its own width in a frame behind the particles.
+    pub speed_noise: Real,
     /// Standard deviation of the multiplicative noise on each half axis.
     pub scale_noise: Real,
     /// Standard deviation of the noise on the scale rate `ȧ`.
@@ -80,11 +86,14 @@ impl Dynamics {
     /// (a particle that hits the border loses that velocity component, so the
     /// filter waits at the border where a target that left will come back),
     /// half axes stay within `[min_half, frame size / 2]`, and `ȧ` within ±10%.
-    pub(crate) fn propagate<R: Rng>(&self, p: &mut Particle, b: &Bounds, rng: &mut R) {
+    /// `speed` is the target's recent speed in pixels a frame (see
+    /// `speed_noise`).
+    pub(crate) fn propagate<R: Rng>(&self, p: &mut Particle, b: &Bounds, speed: Real, rng: &mut R) {
         let s = sqrt(4.0 * p.hx * p.hy);
         let mut n = || normal_from_bits(rng.next_u64());
-        p.x += p.vx + self.position_noise * s * n();
-        p.y += p.vy + self.position_noise * s * n();
+        let spread = max(self.position_noise * s, self.speed_noise * speed);
+        p.x += p.vx + spread * n();
+        p.y += p.vy + spread * n();
         p.vx = self.velocity_decay * p.vx + self.velocity_noise * s * n();
         p.vy = self.velocity_decay * p.vy + self.velocity_noise * s * n();
         p.a_dot = clamp(p.a_dot + self.scale_rate_noise * n(), -0.1, 0.1);
@@ -246,6 +255,7 @@ mod tests {
             position_noise: 0.0,
             velocity_noise: 0.0,
             velocity_decay: 1.0,
+            speed_noise: 0.0,
             scale_noise: 0.0,
             scale_rate_noise: 0.0,
         }
@@ -259,7 +269,7 @@ mod tests {
         let mut p = Particle { x: 100.0, y: 200.0, vx: 3.0, vy: -2.0, hx: 10.0, hy: 20.0, a_dot: 0.05 };
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(1);
         for _ in 0..10 {
-            d.propagate(&mut p, &bounds(), &mut rng);
+            d.propagate(&mut p, &bounds(), 0.0, &mut rng);
         }
         assert_eq!((p.x, p.y), (130.0, 180.0));
         assert_eq!((p.vx, p.vy), (3.0, -2.0));
@@ -277,7 +287,7 @@ mod tests {
         let (mut s1, mut s2) = (0.0f64, 0.0f64);
         for _ in 0..n {
             let mut p = Particle { x: 500.0, y: 500.0, vx: 1.0, hx: 10.0, hy: 10.0, ..Default::default() };
-            d.propagate(&mut p, &bounds(), &mut rng);
+            d.propagate(&mut p, &bounds(), 0.0, &mut rng);
             let dx = (p.x - 501.0) as f64;
             s1 += dx;
             s2 += dx * dx;
@@ -293,7 +303,7 @@ mod tests {
         let d = still();
         let mut p = Particle { x: 5.0, y: 5.0, vx: -10.0, vy: 0.0, hx: 4.0, hy: 4.0, a_dot: 0.0 };
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(1);
-        d.propagate(&mut p, &bounds(), &mut rng);
+        d.propagate(&mut p, &bounds(), 0.0, &mut rng);
         assert_eq!((p.x, p.vx), (0.0, 0.0));
     }
 

@@ -219,6 +219,12 @@ struct Target<const K: usize> {
     /// For [`ModelUpdate::WhenDegraded`]: the sum and count of the
     /// confidences that make up `ρ₀`.
     rho0: (Real, u16),
+    /// The last estimate's centre.
+    centre: (Real, Real),
+    /// The target's recent speed, pixels a frame: the estimate's
+    /// displacement between tracking frames, smoothed (for
+    /// [`crate::Dynamics::speed_noise`]).
+    speed: Real,
 }
 
 /// An external measurement of the target's size for one frame: the
@@ -649,6 +655,8 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             half_axes: (e.hx.max(cfg.min_half_axis), e.hy.max(cfg.min_half_axis)),
             initial_axes: (e.hx.max(cfg.min_half_axis), e.hy.max(cfg.min_half_axis)),
             rho0: (0.0, 0),
+            centre: (e.cx, e.cy),
+            speed: 0.0,
         });
         let m = &mut target.models;
         m.colour.learn(&sc.colour, segments);
@@ -748,7 +756,9 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             self.config.scene_motion && self.motion.update(frame, &look.ellipse, self.state == TrackState::Tracking);
         #[cfg(not(feature = "scene-motion"))]
         let stuck = false;
+        let was_tracking = self.state == TrackState::Tracking;
         let event = self.life_cycle(look.found && !stuck);
+        self.follow(&look.ellipse, was_tracking);
         let model_updated = self.adapt(frame, &look, event);
         Ok(Estimate {
             ellipse: look.ellipse,
@@ -772,7 +782,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         let bounds = Bounds { width: w as Real, height: h as Real, min_half: cfg.min_half_axis };
         resample(particles, weights, copies, cfg.resampling, rng);
         for p in particles.iter_mut() {
-            cfg.dynamics.propagate(p, &bounds, rng);
+            cfg.dynamics.propagate(p, &bounds, target.speed, rng);
             if let Some(prior) = &prior {
                 prior.apply(p);
             }
@@ -962,6 +972,18 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         Look { ellipse, confidence, similarity, found, occluded_quadrant }
     }
 
+    /// Keeps the target's recent speed: the estimate's displacement, over
+    /// frames tracked one after another, smoothed so that one jump of the
+    /// estimate does not scatter the particles for long.
+    fn follow(&mut self, e: &Ellipse, was_tracking: bool) {
+        let Some(target) = self.target.as_mut() else { return };
+        if was_tracking && self.state == TrackState::Tracking {
+            let (dx, dy) = (e.cx - target.centre.0, e.cy - target.centre.1);
+            target.speed += SPEED_RATE * (sqrt(dx * dx + dy * dy) - target.speed);
+        }
+        target.centre = (e.cx, e.cy);
+    }
+
     /// Moves the state machine on whether the target was found this frame.
     fn life_cycle(&mut self, found: bool) -> Option<Event> {
         match self.state {
@@ -1078,6 +1100,10 @@ struct Look {
 /// real sequences' tune split (`track otb --dump`), for boxes whose
 /// contrast cannot be measured.
 const TYPICAL_CONTRAST: Real = 0.39;
+
+/// How much of each frame's displacement enters the target's recent speed:
+/// about the last three frames count.
+const SPEED_RATE: Real = 0.3;
 
 /// The probability that an estimate is on its target, from three signals
 /// that a drifting estimate cannot keep high together: its box's

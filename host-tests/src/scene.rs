@@ -41,6 +41,10 @@ pub enum Story {
     /// The target leaves through the right edge and comes back in through
     /// the left one, on the other side of the frame.
     CrossOver,
+    /// The target zigzags across the frame at most of its own width a
+    /// frame, turning back at each side: faster than a filter whose noise
+    /// scales with the target's size alone can follow.
+    Fast,
     /// The speed audit's scene: a round target of 1/8 of the frame width
     /// (40x40 px in QVGA) on a smooth path, at any resolution.
     Audit,
@@ -80,6 +84,7 @@ pub fn catalogue() -> Vec<SceneSpec> {
         s("turn", Story::Turn, PixelFormat::Yuv422, 40, 9),
         s("cross_over", Story::CrossOver, PixelFormat::Rgb565, 50, 10),
         s("occlusion_i420", Story::Occlusion, PixelFormat::I420, 44, 11),
+        s("fast", Story::Fast, PixelFormat::Rgb565, 40, 12),
     ]
 }
 
@@ -189,6 +194,14 @@ fn layout(story: Story, t: usize, n: usize, (w, h): (usize, usize)) -> Layout {
         }
         Story::Distractor => {
             Layout { cx: 30.0 + 1.5 * tf, cy: 40.0, distractor: Some((100.0 - 1.5 * tf, 58.0)), ..base }
+        }
+        Story::Fast => {
+            // A triangle wave between x = 22 and 106 at 18 px a frame (the
+            // target is 22 px wide), and a vertical swing of ±20 px.
+            let (lo, hi, speed) = (22.0, 106.0, 18.0);
+            let phase = (speed * tf) % (2.0 * (hi - lo));
+            let cx = if phase < hi - lo { lo + phase } else { hi - (phase - (hi - lo)) };
+            Layout { cx, cy: 48.0 + 20.0 * (2.0 * PI * tf / 14.0).sin(), ..base }
         }
         Story::Audit => {
             let (w, h) = (w as f64, h as f64);
