@@ -547,7 +547,7 @@ mod tests {
     #[test]
     fn each_bad_field_is_named() {
         type Case = (fn(&mut Config), &'static str, ParamProblem);
-        let cases: [Case; 23] = [
+        let cases: [Case; 24] = [
             (|c| c.combination = Combination::Weighted { colour: 1.5 }, "combination.colour", ParamProblem::OutOfRange),
             (
                 |c| c.edges = Some(EdgeCue { bins: 7, threshold: 50, flat_bin: true, strong_percent: 10 }),
@@ -575,6 +575,7 @@ mod tests {
             (|c| c.likelihood.eps = Real::NAN, "likelihood.eps", ParamProblem::NonFinite),
             (|c| c.dynamics.position_noise = -0.1, "dynamics.position_noise", ParamProblem::OutOfRange),
             (|c| c.dynamics.scale_noise = 1e9, "dynamics.scale_noise", ParamProblem::OutOfRange),
+            (|c| c.dynamics.speed_noise = Real::NAN, "dynamics.speed_noise", ParamProblem::NonFinite),
             (|c| c.alpha = 1.5, "alpha", ParamProblem::OutOfRange),
             (|c| c.kickoff = 0.0, "kickoff", ParamProblem::OutOfRange),
             (|c| c.lost_after = 0, "lost_after", ParamProblem::OutOfRange),

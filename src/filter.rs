@@ -47,7 +47,8 @@ impl Particle {
 #[derive(Copy, Clone, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Dynamics {
-    /// Standard deviation of the position noise, as a fraction of `s`.
+    /// Standard deviation of the position noise, as a fraction of `s` (or
+    /// more for a fast target: see `speed_noise`).
     pub position_noise: Real,
     /// Standard deviation of the velocity noise, as a fraction of `s`.
     pub velocity_noise: Real,
@@ -56,11 +57,13 @@ pub struct Dynamics {
     /// lets a velocity that resampling once favoured fade instead of carrying
     /// the particle off when the target stops or turns.
     pub velocity_decay: Real,
-    /// Standard deviation of extra position noise per pixel a frame of the
-    /// target's recent speed (the estimate's smoothed displacement). A fast
-    /// target's next position is less certain than a slow one's, and a
-    /// noise scaled to its size alone leaves a target that moves more than
-    /// its own width in a frame behind the particles.
+    /// The position noise's standard deviation is at least this times the
+    /// target's recent speed in pixels a frame (the estimate's smoothed
+    /// displacement), when that is more than `position_noise · s`. A fast
+    /// target's next position is as uncertain as its last move is large;
+    /// a noise scaled to its size alone leaves a target that moves more
+    /// than a fifth of its size a frame behind the particles. 0 scales the
+    /// noise with the size alone.
     pub speed_noise: Real,
     /// Standard deviation of the multiplicative noise on each half axis.
     pub scale_noise: Real,
@@ -275,6 +278,36 @@ mod tests {
         assert_eq!((p.vx, p.vy), (3.0, -2.0));
         let g = 1.05f32.powi(10);
         assert!((p.hx - 10.0 * g).abs() < 1e-3 && (p.hy - 20.0 * g).abs() < 1e-3);
+    }
+
+    /// The sample standard deviation of one step's x displacement of a
+    /// 20x20 particle (s = 20) at rest, for a target of recent `speed`.
+    fn spread_at(d: &Dynamics, speed: Real) -> f64 {
+        let mut rng = Xoshiro128PlusPlus::seed_from_u64(3);
+        let n = 20_000;
+        let (mut s1, mut s2) = (0.0f64, 0.0f64);
+        for _ in 0..n {
+            let mut p = Particle { x: 500.0, y: 500.0, hx: 10.0, hy: 10.0, ..Default::default() };
+            d.propagate(&mut p, &bounds(), speed, &mut rng);
+            let dx = (p.x - 500.0) as f64;
+            s1 += dx;
+            s2 += dx * dx;
+        }
+        let mean = s1 / n as f64;
+        (s2 / n as f64 - mean * mean).sqrt()
+    }
+
+    #[test]
+    fn a_fast_target_spreads_the_particles_as_far_as_it_moves() {
+        // Reason, by hand: position noise 0.1 of s = 20 is 2 px. A target
+        // moving 10 px a frame with speed noise 1 asks for 10 px, the larger,
+        // so that is the spread; one moving 1 px a frame asks for 1 px, and
+        // the size's 2 px stay; speed noise 0 keeps 2 px at any speed.
+        let d = Dynamics { position_noise: 0.1, speed_noise: 1.0, ..still() };
+        assert!((spread_at(&d, 10.0) - 10.0).abs() < 0.25);
+        assert!((spread_at(&d, 1.0) - 2.0).abs() < 0.05);
+        let size_only = Dynamics { speed_noise: 0.0, ..d };
+        assert!((spread_at(&size_only, 10.0) - 2.0).abs() < 0.05);
     }
 
     #[test]

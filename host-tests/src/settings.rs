@@ -32,7 +32,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ("position_noise", "fraction of target size per frame"),
     ("velocity_noise", "fraction of target size per frame"),
     ("velocity_decay", "v <- decay * v + noise; 1 = constant velocity"),
-    ("speed_noise", "extra position noise per px/frame of the target's recent speed"),
+    ("speed_noise", "position noise at least this times the target's recent speed (px/frame)"),
     ("scale_noise", "relative, per frame"),
     ("scale_rate_noise", "per frame"),
     ("alpha", "model adaptation rate"),
