@@ -23,8 +23,13 @@ fn frames(fx: &Fixture) -> Vec<Frame<'_>> {
 /// Runs the default tracker; returns the estimates of frames 1.. and the
 /// model's bins after each of them.
 fn run(fx: &Fixture, seed: u64) -> (Vec<Estimate>, Vec<Vec<u16>>) {
+    run_with(fx, Config::default(), seed)
+}
+
+/// [`run`] with a configuration of its own.
+fn run_with(fx: &Fixture, cfg: Config, seed: u64) -> (Vec<Estimate>, Vec<Vec<u16>>) {
     let fr = frames(fx);
-    let mut t: Box<Tracker<100>> = Box::new(Tracker::new(Config::default(), seed).unwrap());
+    let mut t: Box<Tracker<100>> = Box::new(Tracker::new(cfg, seed).unwrap());
     t.init(&fr[0], fx.frames[0].truth).unwrap();
     let mut est = Vec::new();
     let mut models = Vec::new();
@@ -376,14 +381,9 @@ fn edge_cue_tells_the_target_from_a_same_coloured_decoy() {
         for i in (1..=last).filter(|&i| fx.frames[i].visible_permille >= 500) {
             assert!(on_target(&with_edges[i - 1], &fx.frames[i].truth), "seed {seed}: off the target at frame {i}");
         }
-        let mut t: Box<Tracker<100>> = Box::new(Tracker::new(colour_only, seed).unwrap());
-        t.init(&fr[0], fx.frames[0].truth).unwrap();
-        let mut est = None;
-        for f in &fr[1..] {
-            est = Some(t.step(f).unwrap());
-        }
-        let est = est.unwrap();
-        if on_target(&est, &decoy(last)) {
+        let (colour_est, _) = run_with(&fx, colour_only, seed);
+        let est = colour_est.last().unwrap();
+        if on_target(est, &decoy(last)) {
             decoy_followed += 1;
         }
     }
@@ -393,12 +393,9 @@ fn edge_cue_tells_the_target_from_a_same_coloured_decoy() {
 /// Share of frames after the first on which the estimate's centre lies
 /// inside the true ellipse, for a tracker with `cfg`.
 fn share_on_target(fx: &Fixture, cfg: Config, seed: u64) -> f64 {
-    let fr = frames(fx);
-    let mut t: Box<Tracker<100>> = Box::new(Tracker::new(cfg, seed).unwrap());
-    t.init(&fr[0], fx.frames[0].truth).unwrap();
-    let on =
-        fr[1..].iter().zip(&fx.frames[1..]).filter(|(f, truth)| on_target(&t.step(f).unwrap(), &truth.truth)).count();
-    on as f64 / (fr.len() - 1) as f64
+    let (est, _) = run_with(fx, cfg, seed);
+    let on = est.iter().zip(&fx.frames[1..]).filter(|(e, f)| on_target(e, &f.truth)).count();
+    on as f64 / est.len() as f64
 }
 
 #[test]
