@@ -3,8 +3,31 @@
 use pftrack::{BoundingBox, Config, Estimate, Frame, MeanShift, MeanShiftConfig, Tracker};
 use std::time::Instant;
 
-/// Particle count of the host harness (the papers' 100).
-pub const PARTICLES: usize = 100;
+/// Particle count of the host harness: the papers' 100, or the number in
+/// `PFTRACK_PARTICLES` when the harness is built (1 to 1000), to measure
+/// what another `Tracker<N>` would do, e.g.
+/// `PFTRACK_PARTICLES=200 cargo run --release -p host-tests --bin track -- ablate ...`.
+pub const PARTICLES: usize = match option_env!("PFTRACK_PARTICLES") {
+    Some(n) => parse_count(n),
+    None => 100,
+};
+
+/// A decimal count from 1 to 1000, at compile time: anything else stops
+/// the build with the reason.
+const fn parse_count(s: &str) -> usize {
+    let b = s.as_bytes();
+    assert!(!b.is_empty(), "PFTRACK_PARTICLES is empty");
+    let mut n = 0;
+    let mut i = 0;
+    while i < b.len() {
+        assert!(b[i].is_ascii_digit(), "PFTRACK_PARTICLES is not a decimal number");
+        n = n * 10 + (b[i] - b'0') as usize;
+        assert!(n <= 1000, "PFTRACK_PARTICLES is over 1000");
+        i += 1;
+    }
+    assert!(n >= 1, "PFTRACK_PARTICLES is 0");
+    n
+}
 
 /// Edge-map bytes of the harness's tracker: the core's default, as on the
 /// firmware, so that the accuracy measured here is what a board gets (4-bit
