@@ -240,3 +240,32 @@ pub fn track<'a>(
 fn ms_since(t0: Instant) -> f64 {
     t0.elapsed().as_secs_f64() * 1e3
 }
+
+#[cfg(test)]
+mod tests {
+    use super::parse_count;
+
+    #[test]
+    fn a_particle_count_is_read_as_written() {
+        // Reason: decimal digits, by hand.
+        assert_eq!((parse_count("1"), parse_count("50"), parse_count("1000")), (1, 50, 1000));
+    }
+
+    #[test]
+    #[should_panic(expected = "not a decimal number")]
+    fn a_count_that_is_not_a_number_is_refused() {
+        parse_count("2e2");
+    }
+
+    #[test]
+    #[should_panic(expected = "over 1000")]
+    fn a_count_over_a_thousand_is_refused() {
+        parse_count("1001");
+    }
+
+    #[test]
+    #[should_panic(expected = "is 0")]
+    fn no_particles_is_refused() {
+        parse_count("0");
+    }
+}
