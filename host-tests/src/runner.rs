@@ -5,8 +5,10 @@ use std::time::Instant;
 
 /// Particle count of the host harness: the papers' 100, or the number in
 /// `PFTRACK_PARTICLES` when the harness is built (1 to 1000), to measure
-/// what another `Tracker<N>` would do, e.g.
+/// what another `Tracker<N>` would do with `track`, e.g.
 /// `PFTRACK_PARTICLES=200 cargo run --release -p host-tests --bin track -- ablate ...`.
+/// The tests and `soak` build their own `Tracker<100>`: their thresholds
+/// are for 100.
 pub const PARTICLES: usize = match option_env!("PFTRACK_PARTICLES") {
     Some(n) => parse_count(n),
     None => 100,
