@@ -17,18 +17,12 @@ pub const PARTICLES: usize = match option_env!("PFTRACK_PARTICLES") {
 /// A decimal count from 1 to 1000, at compile time: anything else stops
 /// the build with the reason.
 const fn parse_count(s: &str) -> usize {
-    let b = s.as_bytes();
-    assert!(!b.is_empty(), "PFTRACK_PARTICLES is empty");
-    let mut n = 0;
-    let mut i = 0;
-    while i < b.len() {
-        assert!(b[i].is_ascii_digit(), "PFTRACK_PARTICLES is not a decimal number");
-        n = n * 10 + (b[i] - b'0') as usize;
-        assert!(n <= 1000, "PFTRACK_PARTICLES is over 1000");
-        i += 1;
+    match usize::from_str_radix(s, 10) {
+        Ok(0) => panic!("PFTRACK_PARTICLES is 0"),
+        Ok(n) if n > 1000 => panic!("PFTRACK_PARTICLES is over 1000"),
+        Ok(n) => n,
+        Err(_) => panic!("PFTRACK_PARTICLES is not a decimal number"),
     }
-    assert!(n >= 1, "PFTRACK_PARTICLES is 0");
-    n
 }
 
 /// Edge-map bytes of the harness's tracker: the core's default, as on the
