@@ -66,6 +66,8 @@ pub mod bins;
 pub mod boundary;
 pub mod colour;
 pub mod config;
+#[cfg(feature = "correlation")]
+pub(crate) mod correlation;
 pub mod edges;
 pub mod error;
 pub mod filter;
@@ -88,7 +90,8 @@ pub mod tracker;
 
 pub use colour::Binning;
 pub use config::{
-    BackgroundWeight, BoundaryCue, Config, EdgeCue, Life, ModelUpdate, ShiftSearch, SizeSearch, TableMode, TemplateCue,
+    BackgroundWeight, BoundaryCue, Config, CorrelationCue, EdgeCue, Life, ModelUpdate, ShiftSearch, SizeSearch,
+    TableMode, TemplateCue,
 };
 pub use edges::{EdgeMap, EdgeParams};
 pub use error::{ChromaPlane, ConfigError, Error, FrameError, ParamProblem, RegionError};

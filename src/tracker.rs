@@ -2,6 +2,8 @@
 //! model and explicit searching / tracking / lost states.
 
 use crate::config::{Config, Life, MAX_EDGE_BINS, ModelUpdate, TableMode};
+#[cfg(feature = "correlation")]
+use crate::correlation::CorrelationFilter;
 use crate::edges::EdgeMap;
 use crate::error::{ConfigError, Error, ParamProblem, RegionError};
 use crate::filter::{Bounds, Particle, mean_state, resample};
@@ -452,6 +454,9 @@ pub struct Tracker<
     /// The estimate's motion against its surroundings.
     #[cfg(feature = "scene-motion")]
     motion: SceneMotion,
+    /// The correlation filter on the grey levels around the target.
+    #[cfg(feature = "correlation")]
+    correlation: CorrelationFilter,
 }
 
 /// The signals behind the last step's confidence (see [`on_target`]), for
@@ -516,6 +521,8 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             diag: Diagnostics::default(),
             #[cfg(feature = "scene-motion")]
             motion: SceneMotion::new(),
+            #[cfg(feature = "correlation")]
+            correlation: CorrelationFilter::new(),
         })
     }
 
@@ -591,6 +598,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         self.misses = 0;
         #[cfg(feature = "scene-motion")]
         self.motion.start(frame, &e);
+        self.start_correlation(frame, &e);
         Ok(Estimate::initialised(e, N as u16, self.config.likelihood.sigma_for(0.0)))
     }
 
@@ -610,7 +618,21 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         self.misses = 0;
         #[cfg(feature = "scene-motion")]
         self.motion.start(frame, &Ellipse::from_box(&bbox));
+        self.start_correlation(frame, &Ellipse::from_box(&bbox));
         Ok(())
+    }
+
+    /// The correlation filter learns the first box afresh (and forgets any
+    /// earlier target).
+    #[cfg_attr(not(feature = "correlation"), allow(unused_variables, clippy::unused_self))]
+    fn start_correlation(&mut self, frame: &Frame<'_>, e: &Ellipse) {
+        #[cfg(feature = "correlation")]
+        {
+            self.correlation.reset();
+            if let Some(c) = self.config.correlation {
+                self.correlation.learn(frame, e, c.padding, c.rate);
+            }
+        }
     }
 
     /// The models of `bbox` and the background statistics of `frame`.
@@ -898,8 +920,34 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     /// The weighted mean state, sized against the surroundings, and how it
     /// compares with the models.
     fn estimate(&mut self, frame: &Frame<'_>, observed: &Observed, search: bool) -> Look {
-        let Tracker { config: cfg, particles, weights, scratch, target, state, diag, .. } = self;
+        let Tracker {
+            config: cfg,
+            particles,
+            weights,
+            scratch,
+            target,
+            state,
+            diag,
+            #[cfg(feature = "correlation")]
+            correlation,
+            ..
+        } = self;
         let mut ellipse = mean_state(particles, weights).ellipse();
+        // The texture cue first, so that the searches and the confidence
+        // measure the box where it leaves it.
+        #[cfg(feature = "correlation")]
+        if let Some(c) = cfg.correlation
+            && let Some(response) = correlation.respond(frame, &ellipse, c.padding)
+        {
+            let (dx, dy) = (c.pull * response.shift.0, c.pull * response.shift.1);
+            ellipse.cx += dx;
+            ellipse.cy += dy;
+            let (w, h) = (frame.width() as Real, frame.height() as Real);
+            for p in particles.iter_mut() {
+                p.x = crate::scalar::clamp(p.x + dx, 0.0, w);
+                p.y = crate::scalar::clamp(p.y + dy, 0.0, h);
+            }
+        }
         let Some(target) = target.as_ref() else {
             return Look { ellipse, confidence: 0.0, similarity: 0.0, found: false, occluded_quadrant: None };
         };
@@ -1011,8 +1059,25 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     /// Adapts the models on steady, trustworthy tracking frames; returns
     /// whether they were updated.
     fn adapt(&mut self, frame: &Frame<'_>, look: &Look, event: Option<Event>) -> bool {
-        let Tracker { config: cfg, scratch, target, state, misses, .. } = self;
+        let Tracker {
+            config: cfg,
+            scratch,
+            target,
+            state,
+            misses,
+            #[cfg(feature = "correlation")]
+            correlation,
+            ..
+        } = self;
         let Some(target) = target.as_mut() else { return false };
+        // The filter learns on every confident frame, at its own slow rate:
+        // as a running mean over many frames it does not drift with one.
+        #[cfg(feature = "correlation")]
+        if let Some(c) = cfg.correlation
+            && look.confidence > c.learn_above
+        {
+            correlation.learn(frame, &look.ellipse, c.padding, c.rate);
+        }
         let steady = *state == TrackState::Tracking && event.is_none() && *misses == 0 && cfg.alpha > 0.0;
         let d2_max = target.models.d2_max(cfg);
         let wanted = match cfg.model_update {
@@ -1341,7 +1406,7 @@ fn uniform_particle<R: Rng>(rng: &mut R, width: usize, height: usize, hx: Real, 
 mod tests {
     use super::*;
     use crate::colour::Binning;
-    use crate::config::EdgeCue;
+    use crate::config::{CorrelationCue, EdgeCue};
     use crate::frame::PixelFormat;
     use crate::histogram::Similarity;
 
@@ -1522,6 +1587,65 @@ mod tests {
             t.step(&frame(&clear)).unwrap();
         }
         assert_eq!(t.step(&frame(&clear)).unwrap().occluded_quadrant, None);
+    }
+
+    #[test]
+    fn the_correlation_filter_needs_its_feature_and_sane_settings() {
+        // Reason: a build without the `correlation` feature has no filter,
+        // and a setting outside its documented range is named, not clamped.
+        let on = Config { correlation: Some(CorrelationCue::MEASURED), ..Config::default() };
+        if !cfg!(feature = "correlation") {
+            let err = Tracker::<10>::new(on, 1).unwrap_err();
+            let want = ConfigError { field: "correlation", problem: ParamProblem::NotBuilt { feature: "correlation" } };
+            assert_eq!(err, Error::Config(want));
+            return;
+        }
+        assert!(Tracker::<10>::new(on, 1).is_ok());
+        let m = CorrelationCue::MEASURED;
+        for (cue, field, problem) in [
+            (CorrelationCue { padding: 0.5, ..m }, "correlation.padding", ParamProblem::OutOfRange),
+            (CorrelationCue { padding: Real::NAN, ..m }, "correlation.padding", ParamProblem::NonFinite),
+            (CorrelationCue { rate: 0.0, ..m }, "correlation.rate", ParamProblem::OutOfRange),
+            (CorrelationCue { learn_above: 1.5, ..m }, "correlation.learn_above", ParamProblem::OutOfRange),
+            (CorrelationCue { pull: Real::INFINITY, ..m }, "correlation.pull", ParamProblem::NonFinite),
+        ] {
+            let err = Tracker::<10>::new(Config { correlation: Some(cue), ..Config::default() }, 1).unwrap_err();
+            assert_eq!(err, Error::Config(ConfigError { field, problem }));
+        }
+    }
+
+    #[cfg(feature = "correlation")]
+    #[test]
+    fn the_correlation_filter_follows_a_texture_colour_cannot_place() {
+        // Reason: generated scene with known motion. Every pixel is grey 64
+        // or 95 in 8x8 blocks drawn at random, both in one RGB 8x8x8 bin,
+        // so every box has the same colour histogram; the whole texture
+        // pans 2 px right and 1 px down a frame, so the content first boxed
+        // is centred at (60 + 2t, 45 + t) in frame t. The filter sees the
+        // layout of light and dark and places the box within 2 px (its
+        // window's cells are 2 px).
+        let mut next = crate::testing::lcg(11);
+        let (bw, bh) = (W / 8 + 4, H / 8 + 4);
+        let levels: Vec<u8> = (0..bw * bh).map(|_| if next() >> 31 == 1 { 95 } else { 64 }).collect();
+        let scene = |t: usize| {
+            let mut px = vec![0u8; W * H * 3];
+            for y in 0..H {
+                for x in 0..W {
+                    let (u, v) = (x + 24 - 2 * t, y + 24 - t);
+                    px[(y * W + x) * 3..][..3].fill(levels[(v / 8) * bw + u / 8]);
+                }
+            }
+            px
+        };
+        let cfg = Config { edges: None, correlation: Some(CorrelationCue::MEASURED), ..Config::default() };
+        let mut t: Tracker<60> = Tracker::new(cfg, 1).unwrap();
+        t.init(&frame(&scene(0)), BOX).unwrap();
+        for k in 1..=10 {
+            let e = t.step(&frame(&scene(k))).unwrap();
+            let (cx, cy) = e.bbox().centre();
+            let (x, y) = (60.0 + 2.0 * k as Real, 45.0 + k as Real);
+            assert!((cx - x).abs() <= 2.0 && (cy - y).abs() <= 2.0, "frame {k}: ({cx}, {cy}) against ({x}, {y})");
+        }
     }
 
     #[test]

@@ -208,7 +208,12 @@ fn run() -> bool {
 /// before the tracking loop whose stack is measured.
 #[inline(never)]
 fn make_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
-    let t = FwTracker::new(Config::default(), seed)?;
+    // The correlation build runs the default configuration plus the filter.
+    #[cfg(feature = "correlation")]
+    let config = Config { correlation: Some(pftrack::CorrelationCue::MEASURED), ..Config::default() };
+    #[cfg(not(feature = "correlation"))]
+    let config = Config::default();
+    let t = FwTracker::new(config, seed)?;
     Ok(cortex_m::singleton!(: FwTracker = t))
 }
 

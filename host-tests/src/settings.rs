@@ -54,6 +54,10 @@ pub const KEYS: &[(&str, &str)] = &[
         "shift",
         "off | STEP:ROUNDS:SIMILARITY:TEMPLATE (position hill-climbed against the surroundings, steps of STEP box sizes)",
     ),
+    (
+        "correlation",
+        "off | on | PADDING:RATE:LEARN_ABOVE:PULL (correlation filter on the grey levels; on = 2:0.05:0.3:0.7)",
+    ),
     ("background_weight", "STRENGTH[:ABOVE] | off (colour model weighted against the surroundings; 1 is CBWH)"),
 ];
 
@@ -252,6 +256,19 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
         "redetect" => c.redetect = choice(key, v, &[("on", true), ("off", false)])?,
         "scene_motion" => c.scene_motion = choice(key, v, &[("on", true), ("off", false)])?,
         "surroundings_rate" => c.surroundings_rate = num(key, v)?,
+        "correlation" => {
+            c.correlation = match v.split(':').collect::<Vec<_>>().as_slice() {
+                ["off"] => None,
+                ["on"] => Some(pftrack::CorrelationCue::MEASURED),
+                [padding, rate, above, pull] => Some(pftrack::CorrelationCue {
+                    padding: num(key, padding)?,
+                    rate: num(key, rate)?,
+                    learn_above: num(key, above)?,
+                    pull: num(key, pull)?,
+                }),
+                _ => return Err(format!("{key}: `{v}`: expected off, on or PADDING:RATE:LEARN_ABOVE:PULL")),
+            }
+        }
         "background_weight" => {
             c.background_weight = match v.split(':').collect::<Vec<_>>().as_slice() {
                 ["off"] => None,
@@ -297,6 +314,7 @@ mod tests {
                 "life" => "appearance",
                 "redetect" => "on",
                 "scene_motion" => "on",
+                "correlation" => "on",
                 "background_weight" => "1",
                 "template" => "0.3:0.05",
                 _ => "0.07",

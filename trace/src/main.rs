@@ -45,12 +45,19 @@ fn run(path: &str, seed: u64, kind: &str) -> Result<(), String> {
     file.read_exact(&mut head).map_err(|_| "shorter than a fixture header".to_string())?;
     let h = Header::parse(&head).map_err(|e| e.to_string())?;
     let ms_config = match kind {
-        "pf" => None,
+        "pf" | "correlation" => None,
         "meanshift" => Some(MeanShiftConfig::default()),
         "kalman" => Some(MeanShiftConfig::kalman()),
-        _ => return Err(format!("tracker `{kind}` is not pf, meanshift or kalman")),
+        _ => return Err(format!("tracker `{kind}` is not pf, correlation, meanshift or kalman")),
     };
-    let mut tracker = Box::new(FwTracker::new(Config::default(), seed).map_err(|e| e.to_string())?);
+    // `correlation`: the particle filter with the correlation filter on, as
+    // the firmware built with its `correlation` feature runs it (this
+    // binary must then be built with its own `correlation` feature).
+    let config = match kind {
+        "correlation" => Config { correlation: Some(pftrack::CorrelationCue::MEASURED), ..Config::default() },
+        _ => Config::default(),
+    };
+    let mut tracker = Box::new(FwTracker::new(config, seed).map_err(|e| e.to_string())?);
     let mut ms: Option<Box<MeanShift>> = match ms_config {
         Some(c) => Some(Box::new(MeanShift::new(c).map_err(|e| e.to_string())?)),
         None => None,

@@ -7,10 +7,10 @@
 //! The configuration is picked by an input the optimiser cannot see, among
 //! the defaults and every optional technique (quadrants, adaptive bins,
 //! intersection, exponential likelihood, the degraded-model rule, boundary
-//! cue, likelihood table, scale prior, surroundings-motion test), and the
-//! mean-shift baselines run too;
-//! CI links it with and without `--features all-options`, so the proof covers
-//! the optional code as well.
+//! cue, likelihood table, scale prior, surroundings-motion test, correlation
+//! filter), and the mean-shift baselines run too;
+//! CI links it with and without `--features all-options`, and with
+//! `--features correlation`, so the proof covers the optional code as well.
 #![no_std]
 #![no_main]
 
@@ -30,7 +30,7 @@ use stm32f4xx_hal as _;
 /// One of the configurations, by `pick`.
 fn config(pick: u8) -> Config {
     let d = Config::default();
-    match pick % 9 {
+    match pick % 10 {
         0 => d,
         1 => Config { quadrants: true, binning: Binning::Rgb4x4x4, ..d },
         2 => Config { quadrants: true, binning: Binning::Adaptive, ..d },
@@ -39,6 +39,7 @@ fn config(pick: u8) -> Config {
         5 => Config { model_update: ModelUpdate::WhenDegraded { factor: 0.9, frames: 5 }, ..d },
         6 => Config { boundary: Some(BoundaryCue { weight: 0.3 }), ..d },
         7 => Config { scene_motion: true, ..d },
+        8 => Config { correlation: Some(pftrack::CorrelationCue::MEASURED), ..d },
         _ => Config { table: Some(TableMode { spacing: 2 }), ..d },
     }
 }
