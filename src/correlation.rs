@@ -17,7 +17,9 @@
 //! do not correlate with the wrap-around. The filter is
 //! `H* = A / (B + λ)` with `A ← (1 − η) A + η G F*` and
 //! `B ← (1 − η) B + η F F*`, `G` the spectrum of a Gaussian peak (σ = 2
-//! cells) at the window's centre.
+//! cells) at zero shift (wrapped round the lattice's corner): the learnt
+//! window answers with a peak at zero, a window whose content moved by
+//! `(dx, dy)` with a peak at `(dx, dy)`.
 //!
 //! Memory: the samples are real, so their spectrum is Hermitian and only
 //! columns 0 to `GRID / 2` of it are kept (17 of 32); the Gaussian peak is
@@ -27,7 +29,7 @@
 //! `correlation` feature only: every tracker built with it carries these
 //! bytes, used or not.
 
-use crate::frame::Frame;
+use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565};
 use crate::geometry::Ellipse;
 use crate::scalar::{Real, sqrt};
 use microfft::Complex32;
@@ -81,12 +83,12 @@ const fn taper() -> [Real; GRID] {
 /// `ln(1 + l)` for every luma `l`, computed at compile time (the window's
 /// samples are log-luma, as in MOSSE, so that a shadow scales rather than
 /// shifts them; a table spares 2048 logarithms a frame).
-const LOG_LUMA: [Real; 256] = log_luma();
+const LOG_LUMA: [Real; 256] = log_luma_table();
 
 // Evaluated at compile time only (for a `const`): an index out of range
 // would stop the build, never the device.
 #[allow(clippy::indexing_slicing)]
-const fn log_luma() -> [Real; 256] {
+const fn log_luma_table() -> [Real; 256] {
     let mut out = [0.0; 256];
     let mut l = 0;
     while l < 256 {
@@ -291,14 +293,29 @@ impl CorrelationFilter {
         let mut s1 = 0.0 as Real;
         for (r, row) in self.work.iter_mut().enumerate() {
             let y = crate::scalar::clamp(y0 + (r as Real + 0.5) * h / GRID as Real, 0.0, ymax) as usize;
-            for (slot, xs) in row.iter_mut().zip(columns.chunks_exact(2)) {
-                let mut pair = [0.0 as Real; 2];
-                for (v, &x) in pair.iter_mut().zip(xs.iter()) {
-                    let l = frame.luma(x, y).unwrap_or(0);
-                    *v = LOG_LUMA.get(l as usize).copied().unwrap_or(0.0);
-                    s1 += *v;
+            let mut luma = [0u8; GRID];
+            if let Some(pixels) = frame.row(y) {
+                // One format dispatch per row: the camera formats read
+                // through their own compiled loop.
+                match frame.format() {
+                    PixelFormat::Rgb565 => read_row::<Rgb565>(&mut luma, pixels, &columns),
+                    PixelFormat::Gray8 | PixelFormat::I420 | PixelFormat::Nv12 => {
+                        read_row::<Gray8>(&mut luma, pixels, &columns)
+                    }
+                    _ => {
+                        for (l, &x) in luma.iter_mut().zip(columns.iter()) {
+                            *l = frame.luma_in(pixels, x).unwrap_or(0);
+                        }
+                    }
                 }
-                *slot = Complex32::new(pair[0], pair[1]);
+            }
+            for (slot, pair) in row.iter_mut().zip(luma.chunks_exact(2)) {
+                if let [a, b] = pair {
+                    let (a, b) = (log_luma(*a), log_luma(*b));
+                    s1 += a;
+                    s1 += b;
+                    *slot = Complex32::new(a, b);
+                }
             }
         }
         let mean = s1 / SAMPLES;
@@ -353,6 +370,21 @@ impl CorrelationFilter {
             }
         }
         true
+    }
+}
+
+/// `ln(1 + l)`, from the table.
+fn log_luma(l: u8) -> Real {
+    LOG_LUMA.get(l as usize).copied().unwrap_or(0.0)
+}
+
+/// The luma of `row`'s pixels at `columns`, in a format whose pixels are
+/// self-contained (the others have no [`PixelRead::pixels`], and read
+/// pixel by pixel).
+fn read_row<P: PixelRead>(luma: &mut [u8; GRID], row: &[u8], columns: &[usize; GRID]) {
+    let Some(px) = P::pixels(row) else { return };
+    for (l, &x) in luma.iter_mut().zip(columns.iter()) {
+        *l = px.get(x).map_or(0, |&p| P::px_luma(p));
     }
 }
 

@@ -474,6 +474,10 @@ pub struct Diagnostics {
     pub anchored: Real,
     /// Similarity of the estimate with the adapted models, in `[0, 1]`.
     pub similarity: Real,
+    /// Peak-to-sidelobe ratio of the correlation filter's response this step
+    /// (MOSSE's measure of how sure the filter is: about 3 on a texture it
+    /// never saw); 0 without the filter (`Config::correlation`).
+    pub psr: Real,
 }
 
 impl<const N: usize, const K: usize, const E: usize, const T: usize> Tracker<N, K, E, Xoshiro128PlusPlus, T> {
@@ -933,12 +937,15 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             ..
         } = self;
         let mut ellipse = mean_state(particles, weights).ellipse();
+        #[cfg_attr(not(feature = "correlation"), allow(unused_mut))]
+        let mut psr = 0.0;
         // The texture cue first, so that the searches and the confidence
         // measure the box where it leaves it.
         #[cfg(feature = "correlation")]
         if let Some(c) = cfg.correlation
             && let Some(response) = correlation.respond(frame, &ellipse, c.padding)
         {
+            psr = response.psr;
             let (dx, dy) = (c.pull * response.shift.0, c.pull * response.shift.1);
             ellipse.cx += dx;
             ellipse.cy += dy;
@@ -1012,7 +1019,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             Life::Confidence { lost_below, found_above } => {
                 let correlation = correlation.unwrap_or_else(|| models.template.correlation(frame, &ellipse));
                 let anchored = seen.anchored;
-                *diag = Diagnostics { contrast, correlation, anchored, similarity };
+                *diag = Diagnostics { contrast, correlation, anchored, similarity, psr };
                 let p = on_target(contrast, correlation, anchored);
                 (p, if *state == TrackState::Tracking { p >= lost_below } else { p > found_above })
             }

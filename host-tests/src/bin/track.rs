@@ -51,7 +51,8 @@ struct Common {
     /// Also append every frame's confidence and the signals behind it to
     /// this CSV file: sequence, frame, IoU with the truth, tracking (1 or
     /// 0), confidence, contrast, correlation, anchored similarity,
-    /// similarity (see `tools/fit-confidence`).
+    /// similarity, the correlation filter's PSR (0 without it; see
+    /// `tools/fit-confidence`).
     #[arg(long)]
     dump: Option<PathBuf>,
     /// Start from the first ground-truth box moved by DX of its width and
@@ -231,7 +232,6 @@ const VARIANTS: &[(&str, &[&str])] = &[
     ("life: confidence, lost below 0.8, found above 0.85", &["life=confidence:0.8:0.85"]),
     ("life: + re-detection while lost", &["redetect=on"]),
     ("life: + a box moving with its surroundings is a miss", &["scene_motion=on"]),
-    ("cue: + a correlation filter on the grey levels (MOSSE)", &["correlation=on"]),
     ("size: not searched (random walk only)", &["size=off"]),
     ("size: searched by contrast only", &["size=0.02:0:0.03:0.05"]),
     ("size: scale only (aspect kept)", &["size=0.02:1:scale:0.05"]),
@@ -250,6 +250,7 @@ const VARIANTS: &[(&str, &[&str])] = &[
     ("colour: half background-weighted, every colour", &["background_weight=0.5"]),
     ("colour: fully background-weighted model (CBWH)", &["background_weight=1"]),
     ("cues: + grey template, share 0.3", &["template=0.3:0.05"]),
+    ("cues: + a correlation filter (MOSSE; the `correlation` feature)", &["correlation=on"]),
     ("likelihood: adaptive σ, floor 0.02", &["adaptive_sigma=0.02:0.5"]),
     ("likelihood: σ from spread, 4 e-folds", &["spread_sigma=4:0.005:0.5"]),
     ("likelihood: fixed σ 0.2, no ε", &["sigma=0.2", "eps=0"]),
@@ -516,7 +517,7 @@ fn run_one(path: &Path, common: &Common) -> Result<(Row, Vec<BoundingBox>, Vec<B
         for (i, ((e, d), b)) in run.estimates.iter().zip(&run.diagnostics).zip(run.boxes.iter().skip(1)).enumerate() {
             let Some(t) = truth.get(i + 1).filter(|t| has_target(t)) else { continue };
             text += &format!(
-                "{},{},{:.4},{},{:.4},{:.4},{:.4},{:.4},{:.4}\n",
+                "{},{},{:.4},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}\n",
                 name,
                 i + 2,
                 b.iou(t),
@@ -526,6 +527,7 @@ fn run_one(path: &Path, common: &Common) -> Result<(Row, Vec<BoundingBox>, Vec<B
                 d.correlation,
                 d.anchored,
                 d.similarity,
+                d.psr,
             );
         }
         f.write_all(text.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
