@@ -76,7 +76,10 @@ pub fn line_plot(
     curves: &[Curve],
     score_name: &str,
 ) -> Result<(), String> {
-    let (w, h) = (760u32, 520u32);
+    // Wide enough for the longest legend line (6 px a character, after the
+    // plot area and the legend's line sample).
+    let legend = curves.iter().map(|c| format!("{} [{score_name} {:.3}]", c.name, c.score).chars().count()).max();
+    let (w, h) = ((480 + 46 + 6 * legend.unwrap_or(0) as u32 + 10).max(760), 520u32);
     let mut c = Canvas { img: image::RgbImage::from_pixel(w, h, image::Rgb([255, 255, 255])) };
     // Plot area.
     let (left, top, right, bottom) = (60i32, 40i32, 480i32, 460i32);
