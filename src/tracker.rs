@@ -954,6 +954,27 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
                 p.x = crate::scalar::clamp(p.x + dx, 0.0, w);
                 p.y = crate::scalar::clamp(p.y + dy, 0.0, h);
             }
+            // The scale: windows one step larger and smaller about the new
+            // centre, against the first response, whose peak is already the
+            // best match at the present size wherever it lay in the window.
+            if c.scale_step > 0.0 {
+                let mut best = (response.peak, 1.0);
+                for s in [1.0 + c.scale_step, 1.0 / (1.0 + c.scale_step)] {
+                    let scaled = Ellipse { hx: ellipse.hx * s, hy: ellipse.hy * s, ..ellipse };
+                    if let Some(r) = correlation.respond(frame, &scaled, c.padding)
+                        && r.peak > best.0
+                    {
+                        best = (r.peak, s);
+                    }
+                }
+                let f = 1.0 + c.scale_pull * (best.1 - 1.0);
+                ellipse.hx *= f;
+                ellipse.hy *= f;
+                for p in particles.iter_mut() {
+                    p.hx *= f;
+                    p.hy *= f;
+                }
+            }
         }
         let Some(target) = target.as_ref() else {
             return Look { ellipse, confidence: 0.0, similarity: 0.0, found: false, occluded_quadrant: None };
@@ -1615,6 +1636,8 @@ mod tests {
             (CorrelationCue { rate: 0.0, ..m }, "correlation.rate", ParamProblem::OutOfRange),
             (CorrelationCue { learn_above: 1.5, ..m }, "correlation.learn_above", ParamProblem::OutOfRange),
             (CorrelationCue { pull: Real::INFINITY, ..m }, "correlation.pull", ParamProblem::NonFinite),
+            (CorrelationCue { scale_step: 0.5, ..m }, "correlation.scale_step", ParamProblem::OutOfRange),
+            (CorrelationCue { scale_pull: Real::NAN, ..m }, "correlation.scale_pull", ParamProblem::NonFinite),
         ] {
             let err = Tracker::<10>::new(Config { correlation: Some(cue), ..Config::default() }, 1).unwrap_err();
             assert_eq!(err, Error::Config(ConfigError { field, problem }));

@@ -56,7 +56,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ),
     (
         "correlation",
-        "off | on | PADDING:RATE:LEARN_ABOVE:PULL (correlation filter on the grey levels; on = 2:0.05:0.3:0.7)",
+        "off | on | PADDING:RATE:LEARN_ABOVE:PULL[:SCALE_STEP:SCALE_PULL] (correlation filter on the grey levels; on = 2:0.05:0.3:0.7:0.03:0.3)",
     ),
     ("background_weight", "STRENGTH[:ABOVE] | off (colour model weighted against the surroundings; 1 is CBWH)"),
 ];
@@ -260,13 +260,26 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
             c.correlation = match v.split(':').collect::<Vec<_>>().as_slice() {
                 ["off"] => None,
                 ["on"] => Some(pftrack::CorrelationCue::MEASURED),
-                [padding, rate, above, pull] => Some(pftrack::CorrelationCue {
-                    padding: num(key, padding)?,
-                    rate: num(key, rate)?,
-                    learn_above: num(key, above)?,
-                    pull: num(key, pull)?,
-                }),
-                _ => return Err(format!("{key}: `{v}`: expected off, on or PADDING:RATE:LEARN_ABOVE:PULL")),
+                [padding, rate, above, pull, scale @ ..] => {
+                    let (scale_step, scale_pull) = match scale {
+                        [] => (0.0, 0.0),
+                        [step, pull] => (num(key, step)?, num(key, pull)?),
+                        _ => return Err(format!("{key}: `{v}`: a scale search needs SCALE_STEP:SCALE_PULL")),
+                    };
+                    Some(pftrack::CorrelationCue {
+                        padding: num(key, padding)?,
+                        rate: num(key, rate)?,
+                        learn_above: num(key, above)?,
+                        pull: num(key, pull)?,
+                        scale_step,
+                        scale_pull,
+                    })
+                }
+                _ => {
+                    return Err(format!(
+                        "{key}: `{v}`: expected off, on or PADDING:RATE:LEARN_ABOVE:PULL[:SCALE_STEP:SCALE_PULL]"
+                    ));
+                }
             }
         }
         "background_weight" => {
