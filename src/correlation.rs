@@ -218,18 +218,7 @@ impl CorrelationFilter {
         }
         // Inverse along the columns: each row then holds the half spectrum
         // of one row of the (real) response.
-        for c in 0..COLS {
-            let mut col = [Complex32::new(0.0, 0.0); GRID];
-            for (v, row) in col.iter_mut().zip(self.work.iter()) {
-                *v = row.get(c).copied().unwrap_or_default();
-            }
-            let col = microfft::inverse::ifft_32(&mut col);
-            for (v, row) in col.iter().zip(self.work.iter_mut()) {
-                if let Some(slot) = row.get_mut(c) {
-                    *slot = *v;
-                }
-            }
-        }
+        transform_columns(&mut self.work, microfft::inverse::ifft_32);
         // Then along the rows, two at a time: rows a and b of a real
         // response have Hermitian spectra, so one inverse FFT of
         // `X_a + i X_b` (each mirrored from its half) returns row a in the
@@ -362,19 +351,25 @@ impl CorrelationFilter {
             }
         }
         // Then each column.
-        for c in 0..COLS {
-            let mut col = [Complex32::new(0.0, 0.0); GRID];
-            for (v, row) in col.iter_mut().zip(self.work.iter()) {
-                *v = row.get(c).copied().unwrap_or_default();
-            }
-            let col = microfft::complex::cfft_32(&mut col);
-            for (v, row) in col.iter().zip(self.work.iter_mut()) {
-                if let Some(slot) = row.get_mut(c) {
-                    *slot = *v;
-                }
+        transform_columns(&mut self.work, microfft::complex::cfft_32);
+        true
+    }
+}
+
+/// Transforms each of the spectrum's columns in place by `fft` (forward or
+/// inverse, over the rows).
+fn transform_columns(work: &mut Spectrum, fft: fn(&mut [Complex32; GRID]) -> &mut [Complex32; GRID]) {
+    for c in 0..COLS {
+        let mut col = [Complex32::new(0.0, 0.0); GRID];
+        for (v, row) in col.iter_mut().zip(work.iter()) {
+            *v = row.get(c).copied().unwrap_or_default();
+        }
+        let col = fft(&mut col);
+        for (v, row) in col.iter().zip(work.iter_mut()) {
+            if let Some(slot) = row.get_mut(c) {
+                *slot = *v;
             }
         }
-        true
     }
 }
 

@@ -947,13 +947,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         {
             psr = response.psr;
             let (dx, dy) = (c.pull * response.shift.0, c.pull * response.shift.1);
-            ellipse.cx += dx;
-            ellipse.cy += dy;
-            let (w, h) = (frame.width() as Real, frame.height() as Real);
-            for p in particles.iter_mut() {
-                p.x = crate::scalar::clamp(p.x + dx, 0.0, w);
-                p.y = crate::scalar::clamp(p.y + dy, 0.0, h);
-            }
+            shift_estimate(&mut ellipse, particles, (dx, dy), frame);
             // The scale: windows one step larger and smaller about the new
             // centre, against the first response, whose peak is already the
             // best match at the present size wherever it lay in the window.
@@ -1005,15 +999,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             if let Some(shift) = shift {
                 let (dx, dy);
                 ((dx, dy), parts) = search_shift(scratch, cfg, frame, models, &ellipse, &shift, parts);
-                ellipse.cx += dx;
-                ellipse.cy += dy;
-                // Centres stay in the frame, as the dynamics keep them; the
-                // estimate, in the frame, stays inside the particles' hull.
-                let (w, h) = (frame.width() as Real, frame.height() as Real);
-                for p in particles.iter_mut() {
-                    p.x = crate::scalar::clamp(p.x + dx, 0.0, w);
-                    p.y = crate::scalar::clamp(p.y + dy, 0.0, h);
-                }
+                shift_estimate(&mut ellipse, particles, (dx, dy), frame);
             }
             // A box with no surroundings in the frame (it fills the frame)
             // has no contrast to measure; it counts as a typical target's.
@@ -1421,6 +1407,24 @@ fn redetect<const K: usize>(
         y += stride;
     }
     best.map(|b| b.map(|(x, y, _)| (x, y)))
+}
+
+/// Moves the estimate and every particle by `(dx, dy)`. Centres stay in the
+/// frame, as the dynamics keep them; the estimate, in the frame, stays
+/// inside the particles' hull.
+fn shift_estimate<const N: usize>(
+    ellipse: &mut Ellipse,
+    particles: &mut [Particle; N],
+    (dx, dy): (Real, Real),
+    frame: &Frame<'_>,
+) {
+    ellipse.cx += dx;
+    ellipse.cy += dy;
+    let (w, h) = (frame.width() as Real, frame.height() as Real);
+    for p in particles.iter_mut() {
+        p.x = crate::scalar::clamp(p.x + dx, 0.0, w);
+        p.y = crate::scalar::clamp(p.y + dy, 0.0, h);
+    }
 }
 
 /// A particle at rest anywhere in a `width × height` frame.
