@@ -164,6 +164,23 @@ pub enum Life {
 /// with a colour score (Bertinetto et al. 2016). Built with the
 /// `correlation` Cargo feature (10.9 KB of RAM in every tracker built with
 /// it); asking for it without the feature is a configuration error.
+///
+/// ```
+/// use pftrack::{Config, ConfigError, CorrelationCue, Error, ParamProblem, Tracker};
+///
+/// let config = Config { correlation: Some(CorrelationCue::MEASURED), ..Config::default() };
+/// match Tracker::<100>::new(config, 1) {
+///     Ok(tracker) => assert_eq!(tracker.config().correlation, Some(CorrelationCue::MEASURED)),
+///     // A build without the `correlation` feature names it.
+///     Err(e) => assert_eq!(
+///         e,
+///         Error::Config(ConfigError {
+///             field: "correlation",
+///             problem: ParamProblem::NotBuilt { feature: "correlation" }
+///         })
+///     ),
+/// }
+/// ```
 #[derive(Copy, Clone, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct CorrelationCue {
