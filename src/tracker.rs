@@ -962,12 +962,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
                     }
                 }
                 let f = 1.0 + c.scale_pull * (best.1 - 1.0);
-                ellipse.hx *= f;
-                ellipse.hy *= f;
-                for p in particles.iter_mut() {
-                    p.hx *= f;
-                    p.hy *= f;
-                }
+                scale_estimate(&mut ellipse, particles, (f, f));
             }
         }
         let Some(target) = target.as_ref() else {
@@ -989,12 +984,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             if let Some(search) = size {
                 let (fx, fy);
                 ((fx, fy), parts) = search_size(scratch, cfg, frame, models, &ellipse, &search, target.initial_axes);
-                ellipse.hx *= fx;
-                ellipse.hy *= fy;
-                for p in particles.iter_mut() {
-                    p.hx *= fx;
-                    p.hy *= fy;
-                }
+                scale_estimate(&mut ellipse, particles, (fx, fy));
             }
             if let Some(shift) = shift {
                 let (dx, dy);
@@ -1424,6 +1414,17 @@ fn shift_estimate<const N: usize>(
     for p in particles.iter_mut() {
         p.x = crate::scalar::clamp(p.x + dx, 0.0, w);
         p.y = crate::scalar::clamp(p.y + dy, 0.0, h);
+    }
+}
+
+/// Scales the estimate's half axes and every particle's by `(fx, fy)`, so
+/// that the filter goes on from the size found.
+fn scale_estimate<const N: usize>(ellipse: &mut Ellipse, particles: &mut [Particle; N], (fx, fy): (Real, Real)) {
+    ellipse.hx *= fx;
+    ellipse.hy *= fy;
+    for p in particles.iter_mut() {
+        p.hx *= fx;
+        p.hy *= fy;
     }
 }
 
