@@ -596,8 +596,8 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     pub fn init(&mut self, frame: &Frame<'_>, bbox: BoundingBox) -> Result<Estimate, Error> {
         self.learn(frame, &bbox)?;
         let e = Ellipse::from_box(&bbox);
-        self.particles = [Particle::at(&e); N];
-        self.weights = [1.0 / N as Real; N];
+        self.particles.fill(Particle::at(&e));
+        self.weights.fill(1.0 / N as Real);
         self.state = TrackState::Tracking;
         self.misses = 0;
         #[cfg(feature = "scene-motion")]
@@ -617,7 +617,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         for p in self.particles.iter_mut() {
             *p = uniform_particle(&mut self.rng, w, h, hx, hy);
         }
-        self.weights = [1.0 / N as Real; N];
+        self.weights.fill(1.0 / N as Real);
         self.state = TrackState::Searching;
         self.misses = 0;
         #[cfg(feature = "scene-motion")]
@@ -644,6 +644,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     /// tracker is unchanged. The target is built in place: returned by value,
     /// its models (2 KB at the default K) were copied through the stack
     /// (measured: 11.6 KB of peak stack in `init` on a Cortex-M4).
+    #[inline(never)]
     fn learn(&mut self, frame: &Frame<'_>, bbox: &BoundingBox) -> Result<(), Error> {
         bbox.validate(frame.width(), frame.height())?;
         let Tracker { config: cfg, scratch: sc, target: slot, .. } = self;
@@ -916,7 +917,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
                 *w /= sum;
             }
         } else {
-            self.weights = [1.0 / N as Real; N];
+            self.weights.fill(1.0 / N as Real);
         }
         sigma
     }
