@@ -22,12 +22,15 @@
 //! `(dx, dy)` with a peak at `(dx, dy)`.
 //!
 //! Memory: the samples are real, so their spectrum is Hermitian and only
-//! columns 0 to `GRID / 2` of it are kept (17 of 32); the Gaussian peak is
+//! columns 0 to `GRID / 2` of it are kept (9 of 16); the Gaussian peak is
 //! separable and even, so its spectrum is the outer product of one real
-//! vector with itself. `A`, `B` and one working spectrum take 10.9 KB in
-//! `f32` (the FFTs are `microfft`'s, `f32` like [`Real`]). Built with the
-//! `correlation` feature only: every tracker built with it carries these
-//! bytes, used or not.
+//! vector with itself, a table computed at compile time. `A` and `B` take
+//! 1,728 B in `f32` (the FFTs are `microfft`'s, `f32` like [`Real`]); the
+//! working spectrum, 1,152 B, lives on the stack while a window is read.
+//! A 16-point lattice rather than 32: a quarter of the memory and of the
+//! work, for the same accuracy on the recorded sequences
+//! (docs/accuracy.md). Built with the `correlation` feature only: every
+//! tracker built with it carries these bytes, used or not.
 
 use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565};
 use crate::geometry::Ellipse;
@@ -232,7 +235,8 @@ impl CorrelationFilter {
         }
         let eta = if self.learned { rate } else { 1.0 };
         let keep = 1.0 - eta;
-        for (((num, den), work), &pu) in self.num.iter_mut().zip(self.den.iter_mut()).zip(work.iter()).zip(PEAK.iter()) {
+        for (((num, den), work), &pu) in self.num.iter_mut().zip(self.den.iter_mut()).zip(work.iter()).zip(PEAK.iter())
+        {
             for (((a, b), f), &pv) in num.iter_mut().zip(den.iter_mut()).zip(work.iter()).zip(PEAK.iter()) {
                 let g = pu * pv;
                 *a = *a * keep + f.conj() * (g * eta);
