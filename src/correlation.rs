@@ -16,8 +16,8 @@
 //! scaled to unit energy, then tapered by a Hann window so that its edges
 //! do not correlate with the wrap-around. The filter is
 //! `H* = A / (B + λ)` with `A ← (1 − η) A + η G F*` and
-//! `B ← (1 − η) B + η F F*`, `G` the spectrum of a Gaussian peak (σ = 2
-//! cells) at zero shift (wrapped round the lattice's corner): the learnt
+//! `B ← (1 − η) B + η F F*`, `G` the spectrum of a Gaussian peak (σ = 1
+//! cell) at zero shift (wrapped round the lattice's corner): the learnt
 //! window answers with a peak at zero, a window whose content moved by
 //! `(dx, dy)` with a peak at `(dx, dy)`.
 //!
@@ -542,8 +542,8 @@ mod tests {
         let energy = s.iter().flatten().map(|v| (v - mean) * (v - mean)).sum::<f64>();
         let hann = |i: usize| (std::f64::consts::PI * (i as f64 + 0.5) / GRID as f64).sin().powi(2);
         let (mut worst, mut largest): (f64, f64) = (0.0, 0.0);
-        for u in 0..GRID {
-            for k in 0..COLS {
+        for (u, row) in work.iter().enumerate() {
+            for (k, got) in row.iter().enumerate() {
                 let (mut re, mut im) = (0.0, 0.0);
                 for (r, row) in s.iter().enumerate() {
                     for (c, v) in row.iter().enumerate() {
@@ -553,7 +553,6 @@ mod tests {
                         im += p * a.sin();
                     }
                 }
-                let got = work[u][k];
                 worst = worst.max((got.re as f64 - re).abs()).max((got.im as f64 - im).abs());
                 largest = largest.max(re.hypot(im));
             }
