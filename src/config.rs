@@ -209,11 +209,11 @@ pub struct CorrelationCue {
 impl CorrelationCue {
     /// The settings chosen on the real sequences' tune split
     /// (docs/accuracy.md): a window twice the box, learnt at 0.05 on every
-    /// frame whose confidence exceeds 0.3, a move 0.7 of the way to the
+    /// frame whose confidence exceeds 0.7, a move 0.7 of the way to the
     /// peak, and a size that moves 0.3 of the way to the best of three
     /// scales 3% apart.
     pub const MEASURED: CorrelationCue =
-        CorrelationCue { padding: 2.0, rate: 0.05, learn_above: 0.3, pull: 0.7, scale_step: 0.03, scale_pull: 0.3 };
+        CorrelationCue { padding: 2.0, rate: 0.05, learn_above: 0.7, pull: 0.7, scale_step: 0.03, scale_pull: 0.3 };
 }
 
 /// The grey-level template cue: each particle's normalised cross-correlation

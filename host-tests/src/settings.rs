@@ -56,7 +56,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ),
     (
         "correlation",
-        "off | on | PADDING:RATE:LEARN_ABOVE:PULL[:SCALE_STEP:SCALE_PULL] (correlation filter on the grey levels; on = 2:0.05:0.3:0.7:0.03:0.3)",
+        "off | on | PADDING:RATE:LEARN_ABOVE:PULL[:SCALE_STEP:SCALE_PULL] (correlation filter on the grey levels; on = 2:0.05:0.7:0.7:0.03:0.3)",
     ),
     ("background_weight", "STRENGTH[:ABOVE] | off (colour model weighted against the surroundings; 1 is CBWH)"),
 ];
