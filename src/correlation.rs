@@ -195,7 +195,7 @@ pub(crate) struct Response {
 }
 
 /// A correlation filter: its running numerator and denominator.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub(crate) struct CorrelationFilter {
     /// `A`, the running mean of `G F*`.
     num: Spectrum,
@@ -208,12 +208,6 @@ pub(crate) struct CorrelationFilter {
 /// A zero spectrum: the working spectrum's start (it lives on the stack
 /// while the filter reads a window: the tracker need not keep it).
 const EMPTY: Spectrum = [[Complex32::new(0.0, 0.0); COLS]; GRID];
-
-impl Default for CorrelationFilter {
-    fn default() -> Self {
-        Self::new()
-    }
-}
 
 impl CorrelationFilter {
     /// An empty filter (it answers nothing until it has learnt a window).
@@ -249,7 +243,7 @@ impl CorrelationFilter {
     /// Correlates the filter with the window around `e`: where the response
     /// peaks, or `None` before anything is learnt or for a window with no
     /// texture at all (a flat patch has nothing to correlate).
-    pub(crate) fn respond(&mut self, frame: &Frame<'_>, e: &Ellipse, padding: Real) -> Option<Response> {
+    pub(crate) fn respond(&self, frame: &Frame<'_>, e: &Ellipse, padding: Real) -> Option<Response> {
         let mut work = EMPTY;
         if !self.learned || !transform(&mut work, frame, e, padding) {
             return None;
@@ -567,8 +561,8 @@ mod tests {
         // Reason: ground truth from the generated scene: the second frame is
         // the first with its content moved 3 px right and 2 px up, so the
         // filter learnt on the first, read at the same window, must answer
-        // (3, −2); the window's cells are 2 x 1.5 px, so within a cell's
-        // half after the sub-cell fit.
+        // (3, −2); the window's cells are 4 x 3 px, so within a quarter
+        // cell after the sub-cell fit.
         let first = texture(0.0, 0.0, WAVES);
         let mut filter = CorrelationFilter::new();
         assert_eq!(filter.respond(&frame(&first), &target(), 2.0), None, "nothing learnt yet");

@@ -1661,8 +1661,8 @@ mod tests {
         // so every box has the same colour histogram; the whole texture
         // pans 2 px right and 1 px down a frame, so the content first boxed
         // is centred at (60 + 2t, 45 + t) in frame t. The filter sees the
-        // layout of light and dark and places the box within 2 px (its
-        // window's cells are 2 px).
+        // layout of light and dark and places the box within 2 px (half of
+        // its window's 4-px cells, after the sub-cell fit).
         let mut next = crate::testing::lcg(11);
         let (bw, bh) = (W / 8 + 4, H / 8 + 4);
         let levels: Vec<u8> = (0..bw * bh).map(|_| if next() >> 31 == 1 { 95 } else { 64 }).collect();
