@@ -882,18 +882,9 @@ impl<const K: usize> Model<K> {
         self.support = Support::of(&self.sqrt_q);
     }
 
-    /// Makes this model a copy of `other`, in place.
-    pub(crate) fn copy_from(&mut self, other: &Self) {
-        self.q.copy_from_slice(&other.q);
-        self.sqrt_q.copy_from_slice(&other.sqrt_q);
-        self.support.words.copy_from_slice(&other.support.words);
-        self.segments = other.segments;
-    }
-
     fn refresh_roots(&mut self) {
         for (s, &q) in self.sqrt_q.iter_mut().zip(self.q.iter()) {
-            // sqrt(q · 2^16 · 2^8) = sqrt(q_real) · 2^12
-            *s = crate::scalar::isqrt((q as u32) << 8) as u16;
+            *s = root(q);
         }
         self.support = Support::of(&self.sqrt_q);
     }
@@ -1000,6 +991,12 @@ fn bhattacharyya<const K: usize>(
             sum += (sqrt_q4(c) * s as u32) as u64;
         }
     });
+    rho_of(sum, total)
+}
+
+/// `ρ` from the sum `Σ 16·sqrt(c(u)) · 4096·sqrt(q(u))` and the counts'
+/// total `C` (not 0), clamped to `[0, 1]`.
+fn rho_of(sum: u64, total: u32) -> Real {
     // Σ 16·sqrt(c) · 4096·sqrt(q) / (16·sqrt(C) · 4096)
     let denom = sqrt_q4(total) as Real * 4096.0;
     // In two 32-bit halves: one instruction each on a Cortex-M4F, where a
@@ -1037,6 +1034,64 @@ fn normalised(c: u32, total: u32) -> u16 {
     }
     let v = (c as u64 * Q_ONE + (total as u64 >> 1)) / total as u64;
     v.min(u16::MAX as u64) as u16
+}
+
+/// `sqrt(q)` of a normalised bin, in units of `2^-12`:
+/// `sqrt(q · 2^16 · 2^8) = sqrt(q_real) · 2^12`.
+fn root(q: u16) -> u16 {
+    crate::scalar::isqrt((q as u32) << 8) as u16
+}
+
+/// A model's normalised bins alone, for a model compared once a frame
+/// rather than once a particle (the tracker's first-frame anchor): the
+/// roots the Bhattacharyya sum needs are taken as the sum goes, which
+/// spares storing them and the support (`2·K + 64` bytes of RAM, 1 KB for
+/// 512 bins). [`PlainModel::compare`] gives what [`Model::compare`] gives for the
+/// model the bins were copied from, bit for bit.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) struct PlainModel<const K: usize> {
+    q: [u16; K],
+    segments: u8,
+}
+
+impl<const K: usize> PlainModel<K> {
+    /// All-zero bins (match nothing), to be filled by [`PlainModel::copy_from`].
+    pub(crate) const fn zero() -> Self {
+        PlainModel { q: [0; K], segments: 1 }
+    }
+
+    /// Makes these the bins of `model`, in place (a new value would pass
+    /// `2·K` bytes through the stack).
+    pub(crate) fn copy_from(&mut self, model: &Model<K>) {
+        self.q.copy_from_slice(&model.q);
+        self.segments = model.segments;
+    }
+
+    /// How `h` compares with these bins under `kind`, per segment (see
+    /// [`Model::compare`]).
+    pub(crate) fn compare(&self, h: &Histogram<K>, kind: Similarity) -> [Real; 4] {
+        let mut out = [0.0; 4];
+        let len = Model::<K>::len_of(self.segments);
+        for (o, (c, q)) in out.iter_mut().zip(h.counts.chunks(len).zip(self.q.chunks(len))) {
+            let total = segment_total(h, c, self.segments);
+            *o = match kind {
+                Similarity::Intersection => intersection(c, q, total),
+                Similarity::Bhattacharyya if total == 0 => 0.0,
+                Similarity::Bhattacharyya => {
+                    // The bins both have, as `bhattacharyya` visits through
+                    // the support (a bin's root is 0 only where it is).
+                    let mut sum = 0u64;
+                    for (&c, &q) in c.iter().zip(q.iter()) {
+                        if c != 0 && q != 0 {
+                            sum += (sqrt_q4(c) * root(q) as u32) as u64;
+                        }
+                    }
+                    rho_of(sum, total)
+                }
+            };
+        }
+        out
+    }
 }
 
 /// The Bhattacharyya distance `d = sqrt(1 − ρ)`.
@@ -1255,6 +1310,39 @@ mod tests {
         // The leftovers are really there: outside the support, the reused
         // histogram differs from the fresh one.
         assert_ne!(reused.counts(), fresh.counts());
+    }
+
+    #[test]
+    fn plain_model_compares_as_its_model_does() {
+        // Reason: cross-check of two implementations. A `PlainModel` takes
+        // each root as its sum goes, where a `Model` reads stored roots
+        // through its support; both sum the same integer terms, so every
+        // comparison must be equal bit for bit, for models of one and four
+        // segments, under both similarity kinds, on random sparse
+        // histograms (empty ones and ones disjoint from the model included).
+        let mut next = crate::testing::lcg(5);
+        let mut random = |fill: u32| {
+            let mut h = Histogram::<512>::new();
+            for bin in 0..512 {
+                if next() % 100 < fill {
+                    h.add(bin, next() % 5000);
+                }
+            }
+            h
+        };
+        for segments in [1u8, 4] {
+            for round in 0..30 {
+                let learnt = random(40);
+                let Some(model) = Model::from_segments(&learnt, segments) else { continue };
+                let mut plain = PlainModel::zero();
+                plain.copy_from(&model);
+                for h in [random(round % 10), random(60), Histogram::new(), learnt.clone()] {
+                    for kind in [Similarity::Bhattacharyya, Similarity::Intersection] {
+                        assert_eq!(plain.compare(&h, kind), model.compare(&h, kind), "{segments} {kind:?}");
+                    }
+                }
+            }
+        }
     }
 
     /// The Bhattacharyya sum over every bin, with no support bitmap, in

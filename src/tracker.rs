@@ -10,7 +10,7 @@ use crate::filter::{Bounds, Particle, mean_state, resample};
 use crate::foreground::{Foreground, ForegroundMap, RING};
 use crate::frame::Frame;
 use crate::geometry::{BoundingBox, Ellipse};
-use crate::histogram::{Clear, Histogram, Layout, Model};
+use crate::histogram::{Clear, Histogram, Layout, Model, PlainModel};
 use crate::likelihood::gaussian;
 #[cfg(feature = "scene-motion")]
 use crate::motion::SceneMotion;
@@ -191,9 +191,10 @@ struct Models<const K: usize> {
     fg: Foreground<K>,
     /// The grey-level template.
     template: crate::template::Template,
-    /// The colour model as first learnt, which never adapts (learnt for
-    /// [`Life::Confidence`] only).
-    anchor: Model<K>,
+    /// The colour model's bins as first learnt, which never adapt (learnt
+    /// for [`Life::Confidence`] only; compared once a frame, so without the
+    /// roots and support a model keeps for its per-particle sums).
+    anchor: PlainModel<K>,
 }
 
 impl<const K: usize> Models<K> {
@@ -439,8 +440,6 @@ pub struct Tracker<
     config: Config,
     rng: R,
     particles: [Particle; N],
-    /// Copies per particle while resampling in place.
-    copies: [u16; N],
     /// Normalised weights of `particles` after a step.
     weights: [Real; N],
     scratch: Scratch<K, E>,
@@ -509,7 +508,6 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             config,
             rng,
             particles: [Particle::default(); N],
-            copies: [0; N],
             weights: [1.0 / N as Real; N],
             scratch: Scratch {
                 colour: Histogram::new(),
@@ -677,7 +675,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
                 edge,
                 fg: Foreground::new(),
                 template: crate::template::Template::new(),
-                anchor: Model::zero(),
+                anchor: PlainModel::zero(),
             },
             frame: (fw, fh),
             threshold: 0.0,
@@ -806,11 +804,13 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     /// particle by the dynamics, and, while the target is not tracked,
     /// re-draws a share of them to keep exploring.
     fn predict(&mut self, frame: &Frame<'_>, prior: Option<ScalePrior>) {
-        let Tracker { config: cfg, rng, particles, copies, weights, scratch, target, state, .. } = self;
+        let Tracker { config: cfg, rng, particles, weights, scratch, target, state, .. } = self;
         let Some(target) = target.as_ref() else { return };
         let (w, h) = (frame.width(), frame.height());
         let bounds = Bounds { width: w as Real, height: h as Real, min_half: cfg.min_half_axis };
-        resample(particles, weights, copies, cfg.resampling, rng);
+        // On the stack: the counts live only while the set is rewritten.
+        let mut copies = [0u16; N];
+        resample(particles, weights, &mut copies, cfg.resampling, rng);
         for p in particles.iter_mut() {
             cfg.dynamics.propagate(p, &bounds, target.speed, rng);
             if let Some(prior) = &prior {
@@ -866,14 +866,13 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         if let Some(mode) = table {
             self.fill_table(frame, mode);
         }
-        let Tracker { config: cfg, particles, weights, copies, scratch, target, table: tab, .. } = self;
+        let Tracker { config: cfg, particles, weights, scratch, target, table: tab, .. } = self;
         let Some(target) = target.as_ref() else { return Observed::default() };
-        // The boundary scores wait in `copies`, free until the next
-        // resampling (in 1/16 Sobel units; at most 1443 · 16 < 2^16), until
-        // the best one, their normaliser, is known: a second array would
-        // cost 2·N bytes of RAM for nothing.
+        // The boundary scores (in 1/16 Sobel units; at most 1443 · 16 <
+        // 2^16) wait until the best one, their normaliser, is known.
+        let mut scores = [0u16; N];
         let mut out = Observed { appearing: 0, g_best: 0, d2_max: target.models.d2_max(cfg) };
-        for ((p, w), g) in particles.iter().zip(weights.iter_mut()).zip(copies.iter_mut()) {
+        for ((p, w), g) in particles.iter().zip(weights.iter_mut()).zip(scores.iter_mut()) {
             let e = p.ellipse();
             let (rho, sim) = if table.is_some() {
                 tab.lookup(p.x, p.y)
@@ -896,7 +895,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         if let Some(b) = cfg.boundary
             && out.g_best > 0
         {
-            for (w, &g) in weights.iter_mut().zip(copies.iter()) {
+            for (w, &g) in weights.iter_mut().zip(scores.iter()) {
                 *w = (1.0 - b.weight) * *w + b.weight * (g as Real / out.g_best as Real);
             }
         }
