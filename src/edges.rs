@@ -208,149 +208,89 @@ impl<const E: usize> EdgeMap<E> {
         // through the stack.
         (self.lattice, self.j0, self.k0, self.cols, self.rows, self.shift) = (lattice, j0, k0, cols, rows, shift);
         (self.nibbles, self.stride) = (nibbles, stride);
-        // Rows one pixel apart at full resolution (the checkerboard, every
-        // pixel) share luma between neighbouring rows: a ring of three luma
-        // rows computes each pixel's once (measured on the QVGA audit: 175
-        // instructions per cell with six lumas read per cell). Camera
-        // formats only: RGB888 (a host format) keeps the general fill, to
-        // spare flash.
-        let rows_fill = lattice.step() == 1 && shift == 0;
-        // A planar frame's rows are its luma plane's, GRAY8 rows: edges
-        // need nothing else.
-        match (frame.format(), rows_fill) {
-            (PixelFormat::Rgb565, true) => self.fill_rows::<Rgb565>(frame, bins, threshold, weak),
-            (PixelFormat::Gray8 | PixelFormat::I420 | PixelFormat::Nv12, true) => {
-                self.fill_rows::<Gray8>(frame, bins, threshold, weak)
-            }
-            (PixelFormat::Yuv422, true) => self.fill_rows::<Yuv422>(frame, bins, threshold, weak),
-            (PixelFormat::Rgb565, false) => self.fill::<Rgb565>(frame, bins, threshold, weak),
-            (PixelFormat::Rgb888, _) => self.fill::<Rgb888>(frame, bins, threshold, weak),
-            (PixelFormat::Yuv422, false) => self.fill::<Yuv422>(frame, bins, threshold, weak),
-            (PixelFormat::Gray8 | PixelFormat::I420 | PixelFormat::Nv12, false) => {
-                self.fill::<Gray8>(frame, bins, threshold, weak)
-            }
-        }
+        self.fill(frame, bins, threshold, weak);
     }
 
-    /// [`EdgeMap::fill`] for a lattice of step 1 at full resolution (map
-    /// row `j` is pixel row `j0 + j`), column tile by column tile, with the
-    /// lumas of the three rows a Sobel window needs kept in a ring that
-    /// moves down one row at a time.
-    fn fill_rows<P: PixelRead>(&mut self, frame: &Frame<'_>, bins: usize, threshold: u16, weak: u8) {
-        /// Pixels per tile row (a third of the ring).
+    /// Fills the map's cells, column tile by column tile. The lumas of the
+    /// three rows a Sobel window needs are read into a ring of rows, one
+    /// format dispatch per ring row (then that format's own loop), and the
+    /// cells are classified from the ring by loops shared by every format:
+    /// a classifying loop per format cost about 1.4 KB of Cortex-M0+ flash
+    /// each. Cells at most two pixels apart read whole spans of their rows,
+    /// and rows one pixel apart (a lattice of step 1 at full resolution)
+    /// share their lumas with the next map row: each pixel's luma is
+    /// computed once (measured on the QVGA audit: 175 instructions per cell
+    /// with six lumas read per cell). Sparser cells read only the three
+    /// columns of each cell's window.
+    fn fill(&mut self, frame: &Frame<'_>, bins: usize, threshold: u16, weak: u8) {
+        /// Lumas per ring row.
         const SPAN: usize = 192;
         let (w, h) = (frame.width(), frame.height());
-        let xs = self.lattice.x_step();
-        let (cols, stride, nibbles, k0, j0) = (self.cols, self.stride, self.nibbles, self.k0, self.j0);
+        let (s, xs) = (self.lattice.step(), self.lattice.x_step());
+        let (cols, stride, nibbles, k0, j0, shift) =
+            (self.cols, self.stride, self.nibbles, self.k0, self.j0, self.shift);
+        // At least 1 (the shift is below 16), said so that the division
+        // below needs no check.
+        let dx = (xs << shift).max(1);
+        let sparse = dx > 2;
         let t2 = threshold as i32 * threshold as i32;
-        // Cells c0..c1 of a tile need pixels from x(c0) - 1 to x(c1 - 1) + 1,
-        // where x(c) = phase + (k0 + c)·xs with phase 0 or 1, and
+        // Dense cells c0..c1 of a tile need pixels from x(c0) - 1 to
+        // x(c1 - 1) + 1, where x(c) = phase + k0·xs + c·dx with phase 0 or
+        // 1 (dense lattices have a step of 1, or no checkerboard), and
         // `ring_cells` reads five-column windows from the first of each
-        // pair of cells: an even number per tile, so that pairs (and cell
-        // bytes) never straddle two tiles.
-        let per_tile = ((SPAN - 6) / xs + 1) & !1;
+        // pair of cells. Sparse cells take three ring columns each. Either
+        // way an even number per tile, so that pairs (and cell bytes) never
+        // straddle two tiles.
+        let per_tile = if sparse { SPAN / 3 } else { ((SPAN - 6) / dx + 1) & !1 };
         let mut ring = [[0u8; SPAN]; 3];
         let mut c0 = 0;
         while c0 < cols {
             let c1 = (c0 + per_tile).min(cols);
-            // Ring column i holds pixel xa + i.
-            let xa = ((k0 + c0) * xs).saturating_sub(1);
-            let xb = ((k0 + c1 - 1) * xs + 3).min(w);
-            // Which pixel row each ring row holds (none yet).
-            let mut held = [usize::MAX; 3];
+            // Dense: ring column i holds pixel xa + i.
+            let xa = (k0 * xs + c0 * dx).saturating_sub(1);
+            let xb = (k0 * xs + (c1 - 1) * dx + 3).min(w);
+            // Which pixel row (and, sparse, which first cell's column) each
+            // ring row holds (none yet).
+            let mut held = [(usize::MAX, 0); 3];
             for j in 0..self.rows {
-                let y = j0 + j;
+                let y = (j0 + (j << shift)) * s;
                 let Some(out) = self.bytes.get_mut(j * stride..(j + 1) * stride) else { break };
+                let x_first = self.lattice.phase(y) + k0 * xs + c0 * dx;
                 let border = y == 0 || y + 1 >= h;
                 if !border {
                     // Rows y-1, y, y+1 live in ring rows (y-1)%3, y%3, (y+1)%3.
+                    let key = if sparse { x_first } else { 0 };
                     for r in [y - 1, y, y + 1] {
                         if let Some(slot) = held.get_mut(r % 3)
-                            && *slot != r
+                            && *slot != (r, key)
                             && let Some(dst) = ring.get_mut(r % 3)
                         {
-                            let src = frame.row(r).unwrap_or(&[]);
-                            match P::pixels(src).and_then(|px| px.get(xa..xb)) {
-                                // Zipped slices: no bounds test per pixel.
-                                Some(px) => {
-                                    // Two pixels per iteration: half the
-                                    // loop's overhead.
-                                    let (pairs, last) = px.as_chunks::<2>();
-                                    for (v, &[p, q]) in dst.as_chunks_mut::<2>().0.iter_mut().zip(pairs) {
-                                        *v = [P::px_luma(p), P::px_luma(q)];
-                                    }
-                                    if let (Some(v), Some(&p)) = (dst.get_mut(2 * pairs.len()), last.first()) {
-                                        *v = P::px_luma(p);
-                                    }
-                                }
-                                None => {
-                                    for (i, v) in dst.iter_mut().enumerate().take(xb.saturating_sub(xa)) {
-                                        *v = P::luma(src, xa + i).unwrap_or(0);
-                                    }
-                                }
+                            let row = frame.row(r).unwrap_or(&[]);
+                            if sparse {
+                                luma_windows(
+                                    frame,
+                                    row,
+                                    (x_first, dx),
+                                    dst.get_mut(..3 * (c1 - c0)).unwrap_or_default(),
+                                );
+                            } else {
+                                luma_span(frame, row, (xa, xb), dst);
                             }
-                            *slot = r;
+                            *slot = (r, key);
                         }
                     }
                 }
                 let row_of = |i: usize| ring.get(i).map_or(&[][..], |r| &r[..]);
                 let window = (row_of((y + 2) % 3), row_of(y % 3), row_of((y + 1) % 3));
-                let x_first = self.lattice.phase(y) + (k0 + c0) * xs;
                 let sobel_cfg = SobelCells { w, border, bins, t2, weak, nibbles };
                 // Compiled per spacing: the window's columns are then fixed.
-                if xs == 1 {
-                    ring_cells::<1>(out, window, xa, x_first, (c0, c1), &sobel_cfg);
-                } else {
-                    ring_cells::<2>(out, window, xa, x_first, (c0, c1), &sobel_cfg);
+                match dx {
+                    1 => ring_cells::<1>(out, window, xa, x_first, (c0, c1), &sobel_cfg),
+                    2 => ring_cells::<2>(out, window, xa, x_first, (c0, c1), &sobel_cfg),
+                    _ => sparse_cells(out, window, (x_first, dx), (c0, c1), &sobel_cfg),
                 }
             }
             c0 = c1;
-        }
-    }
-
-    fn fill<P: PixelRead>(&mut self, frame: &Frame<'_>, bins: usize, threshold: u16, weak: u8) {
-        let (w, h) = (frame.width(), frame.height());
-        let (s, xs) = (self.lattice.step(), self.lattice.x_step());
-        let (cols, stride, shift, nibbles) = (self.cols, self.stride, self.shift, self.nibbles);
-        let t2 = threshold as i32 * threshold as i32;
-        let empty: &[u8] = &[];
-        for j in 0..self.rows {
-            let y = (self.j0 + (j << shift)) * s;
-            let x_first = self.lattice.phase(y) + self.k0 * xs;
-            let dx = xs << shift;
-            let out = self.bytes.get_mut(j * stride..(j + 1) * stride).unwrap_or_default();
-            // The Sobel window needs rows y-1..=y+1: the border rows are weak
-            // (NONE is NIBBLE_NONE in both nibbles).
-            if y == 0 || y + 1 >= h {
-                out.fill(NONE);
-                continue;
-            }
-            let (r0, r1, r2) =
-                (frame.row(y - 1).unwrap_or(empty), frame.row(y).unwrap_or(empty), frame.row(y + 1).unwrap_or(empty));
-            // Luma of column x in the three rows (written out: an array
-            // `map` here is a call per column on a Cortex-M4).
-            let l = |r: &[u8], x: usize| P::luma(r, x).map_or(0, i32::from);
-            let column = |x: usize| [l(r0, x), l(r1, x), l(r2, x)];
-            // Slide a 3-column window along the row: cells one or two pixels
-            // apart (every pixel, or a checkerboard) share columns.
-            let mut window: Option<(usize, [[i32; 3]; 3])> = None;
-            for i in 0..cols {
-                let x = x_first + i * dx;
-                let v = if x == 0 || x + 1 >= w {
-                    NONE
-                } else {
-                    let cols3 = match window {
-                        Some((px, [_, m, r])) if px + 1 == x => [m, r, column(x + 1)],
-                        Some((px, [_, _, r])) if px + 2 == x => [r, column(x), column(x + 1)],
-                        _ => [column(x - 1), column(x), column(x + 1)],
-                    };
-                    window = Some((x, cols3));
-                    let [[a, dd, g], [b, _, hh], [c, f, k]] = cols3;
-                    let (gx, gy) = sobel([a, b, c, dd, 0, f, g, hh, k]);
-                    if gx * gx + gy * gy < t2 { weak } else { orientation_bin(gx, gy, bins) as u8 }
-                };
-                put(out, i, v, nibbles);
-            }
         }
     }
 
@@ -398,6 +338,95 @@ impl<const E: usize> EdgeMap<E> {
             self.rows,
             self.stride,
         ))
+    }
+}
+
+/// The lumas of pixels `xa..xb` of `row` (a row of `frame`) into `dst`:
+/// one format dispatch per row, then that format's own loop.
+fn luma_span(frame: &Frame<'_>, row: &[u8], span: (usize, usize), dst: &mut [u8]) {
+    match frame.format() {
+        PixelFormat::Rgb565 => luma_span_of::<Rgb565>(row, span, dst),
+        PixelFormat::Rgb888 => luma_span_of::<Rgb888>(row, span, dst),
+        PixelFormat::Yuv422 => luma_span_of::<Yuv422>(row, span, dst),
+        // A planar frame's rows are its luma plane's.
+        PixelFormat::Gray8 | PixelFormat::I420 | PixelFormat::Nv12 => luma_span_of::<Gray8>(row, span, dst),
+    }
+}
+
+/// The lumas of columns `x − 1`, `x`, `x + 1` for `x` = `x0`, `x0 + dx`,
+/// … of `row` (a row of `frame`), three to a cell, into `dst` (0 where a
+/// column is outside the row): one format dispatch per row, then that
+/// format's own loop.
+fn luma_windows(frame: &Frame<'_>, row: &[u8], at: (usize, usize), dst: &mut [u8]) {
+    match frame.format() {
+        PixelFormat::Rgb565 => luma_windows_of::<Rgb565>(row, at, dst),
+        PixelFormat::Rgb888 => luma_windows_of::<Rgb888>(row, at, dst),
+        PixelFormat::Yuv422 => luma_windows_of::<Yuv422>(row, at, dst),
+        PixelFormat::Gray8 | PixelFormat::I420 | PixelFormat::Nv12 => luma_windows_of::<Gray8>(row, at, dst),
+    }
+}
+
+/// [`luma_windows`] in format `P`.
+fn luma_windows_of<P: PixelRead>(row: &[u8], (x0, dx): (usize, usize), dst: &mut [u8]) {
+    // Column x − 1 of x = 0 wraps past the row: 0 (such a cell is at the
+    // frame's border and never classified).
+    let l = |x: usize| P::luma(row, x).unwrap_or(0);
+    let mut x = x0;
+    for cell in dst.as_chunks_mut::<3>().0 {
+        // Written out: a loop here is not unrolled at opt-level "s".
+        *cell = [l(x.wrapping_sub(1)), l(x), l(x + 1)];
+        x += dx;
+    }
+}
+
+/// Cells `c0..c1` of map row `out`, `dx` pixels apart from pixel `x_first`,
+/// from ring rows holding three lumas per cell ([`luma_windows`]), one cell
+/// at a time.
+#[inline(never)]
+fn sparse_cells(
+    out: &mut [u8],
+    (r0, r1, r2): (&[u8], &[u8], &[u8]),
+    (x_first, dx): (usize, usize),
+    (c0, c1): (usize, usize),
+    cfg: &SobelCells,
+) {
+    let SobelCells { w, border, bins, t2, weak, nibbles } = *cfg;
+    let class = Classify { t2, weak, shift: sector_shift(bins) };
+    // Zipped windows: no bounds test per cell.
+    let windows = r0.as_chunks::<3>().0.iter().zip(r1.as_chunks::<3>().0).zip(r2.as_chunks::<3>().0);
+    let mut x = x_first;
+    for (c, ((&[a, b, cc], &[d, _, f]), &[g, h, k])) in (c0..c1).zip(windows) {
+        let v = if border || x == 0 || x + 1 >= w {
+            NONE
+        } else {
+            let i = |v: u8| v as i32;
+            let (gx, gy) = sobel([i(a), i(b), i(cc), i(d), 0, i(f), i(g), i(h), i(k)]);
+            class.of(gx, gy)
+        };
+        put(out, c, v, nibbles);
+        x += dx;
+    }
+}
+
+/// [`luma_span`] in format `P`.
+fn luma_span_of<P: PixelRead>(row: &[u8], (xa, xb): (usize, usize), dst: &mut [u8]) {
+    match P::pixels(row).and_then(|px| px.get(xa..xb)) {
+        // Zipped slices: no bounds test per pixel.
+        Some(px) => {
+            // Two pixels per iteration: half the loop's overhead.
+            let (pairs, last) = px.as_chunks::<2>();
+            for (v, &[p, q]) in dst.as_chunks_mut::<2>().0.iter_mut().zip(pairs) {
+                *v = [P::px_luma(p), P::px_luma(q)];
+            }
+            if let (Some(v), Some(&p)) = (dst.get_mut(2 * pairs.len()), last.first()) {
+                *v = P::px_luma(p);
+            }
+        }
+        None => {
+            for (i, v) in dst.iter_mut().enumerate().take(xb.saturating_sub(xa)) {
+                *v = P::luma(row, xa + i).unwrap_or(0);
+            }
+        }
     }
 }
 
