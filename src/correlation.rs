@@ -194,15 +194,65 @@ pub(crate) struct Response {
     pub peak: Real,
 }
 
-/// A correlation filter: its running numerator and denominator.
+/// A correlation filter: its running numerator and denominator, packed.
+///
+/// Columns 0 and `GRID / 2` of a real window's half spectrum are the
+/// spectra of real columns (the rows' DC and Nyquist terms), so each is
+/// Hermitian along the rows: its rows past `GRID / 2` are the conjugates of
+/// rows `GRID − r`, and its rows 0 and `GRID / 2` are real. `A = G F*` and
+/// `B = F F*` inherit that (`G` is real and even), so the two columns hold
+/// `2 · (GRID / 2 + 1)` independent values between them: one column's
+/// worth, 128 B of `A` and 56 B of `B` that need not be kept ([`slot`]).
 #[derive(Clone, Debug)]
 pub(crate) struct CorrelationFilter {
-    /// `A`, the running mean of `G F*`.
-    num: Spectrum,
-    /// `B`, the running mean of `F F*` (real).
-    den: [[Real; COLS]; GRID],
+    /// `A`, the running mean of `G F*`: columns 1 to `GRID / 2 − 1` as they
+    /// are, both edge columns in column 0.
+    num: [[Complex32; COLS - 1]; GRID],
+    /// `B`, the running mean of `F F*` (real), laid out as `num`, and the
+    /// two values of its last column that do not fit (rows 0 and `GRID / 2`).
+    den: ([[Real; COLS - 1]; GRID], [Real; 2]),
     /// Whether `num` and `den` hold a learnt window.
     learned: bool,
+}
+
+/// Where entry `(r, c)` of the half spectrum is kept in a
+/// [`CorrelationFilter`]: at `[row][col]`, whole or one part of it, and
+/// whether it is the conjugate of what is kept (rows past the middle of
+/// the edge columns, which are not learnt).
+#[derive(Copy, Clone, Debug, PartialEq)]
+struct Slot {
+    row: usize,
+    col: usize,
+    part: Part,
+    mirrored: bool,
+}
+
+/// Which part of a kept `A` entry an entry of the spectrum is.
+#[derive(Copy, Clone, Debug, PartialEq)]
+enum Part {
+    /// The whole complex value.
+    Whole,
+    /// A real entry, kept as the real part (column 0's rows 0 and `GRID / 2`).
+    Re,
+    /// A real entry, kept as the imaginary part (the last column's rows 0
+    /// and `GRID / 2`; its `B` is in `den.1`).
+    Im,
+}
+
+/// The [`Slot`] of entry `(r, c)` of the half spectrum.
+fn slot(r: usize, c: usize) -> Slot {
+    const MID: usize = GRID / 2;
+    let edge = c == 0 || c == MID;
+    let mirrored = edge && r > MID;
+    let k = if mirrored { GRID - r } else { r };
+    let part = match (edge && (k == 0 || k == MID), c == 0) {
+        (false, _) => Part::Whole,
+        (true, true) => Part::Re,
+        (true, false) => Part::Im,
+    };
+    // The last column's complex rows (1 to MID − 1) sit below column 0's.
+    let (row, col) = if c == MID && part == Part::Whole { (k + MID, 0) } else { (k, if c == MID { 0 } else { c }) };
+    Slot { row, col, part, mirrored }
 }
 
 /// A zero spectrum: the working spectrum's start (it lives on the stack
@@ -212,7 +262,11 @@ const EMPTY: Spectrum = [[Complex32::new(0.0, 0.0); COLS]; GRID];
 impl CorrelationFilter {
     /// An empty filter (it answers nothing until it has learnt a window).
     pub(crate) const fn new() -> Self {
-        CorrelationFilter { num: EMPTY, den: [[0.0; COLS]; GRID], learned: false }
+        CorrelationFilter {
+            num: [[Complex32::new(0.0, 0.0); COLS - 1]; GRID],
+            den: ([[0.0; COLS - 1]; GRID], [0.0; 2]),
+            learned: false,
+        }
     }
 
     /// Forgets what was learnt.
@@ -229,11 +283,27 @@ impl CorrelationFilter {
         }
         let eta = if self.learned { rate } else { 1.0 };
         let keep = 1.0 - eta;
-        for (((num, den), work), &pu) in self.num.iter_mut().zip(self.den.iter_mut()).zip(work.iter()).zip(PEAK.iter())
-        {
-            for (((a, b), f), &pv) in num.iter_mut().zip(den.iter_mut()).zip(work.iter()).zip(PEAK.iter()) {
-                let g = pu * pv;
-                *a = *a * keep + f.conj() * (g * eta);
+        for ((r, row), &pu) in work.iter().enumerate().zip(PEAK.iter()) {
+            for ((c, f), &pv) in row.iter().enumerate().zip(PEAK.iter()) {
+                let at = slot(r, c);
+                if at.mirrored {
+                    continue;
+                }
+                let (Some(a), Some(b)) = (
+                    self.num.get_mut(at.row).and_then(|n| n.get_mut(at.col)),
+                    match at.part {
+                        Part::Im => self.den.1.get_mut(at.row / (GRID / 2)),
+                        _ => self.den.0.get_mut(at.row).and_then(|d| d.get_mut(at.col)),
+                    },
+                ) else {
+                    continue;
+                };
+                let new = f.conj() * (pu * pv * eta);
+                match at.part {
+                    Part::Whole => *a = *a * keep + new,
+                    Part::Re => a.re = a.re * keep + new.re,
+                    Part::Im => a.im = a.im * keep + new.re,
+                }
                 *b = *b * keep + (f.re * f.re + f.im * f.im) * eta;
             }
         }
@@ -248,9 +318,10 @@ impl CorrelationFilter {
         if !self.learned || !transform(&mut work, frame, e, padding) {
             return None;
         }
-        for ((work, num), den) in work.iter_mut().zip(self.num.iter()).zip(self.den.iter()) {
-            for ((f, a), &b) in work.iter_mut().zip(num.iter()).zip(den.iter()) {
-                *f = *a * *f / (b + LAMBDA);
+        for (r, row) in work.iter_mut().enumerate() {
+            for (c, f) in row.iter_mut().enumerate() {
+                let (a, b) = self.entry(slot(r, c));
+                *f = a * *f / (b + LAMBDA);
             }
         }
         // Inverse along the columns: each row then holds the half spectrum
@@ -307,6 +378,24 @@ impl CorrelationFilter {
         let sd = sqrt((s2 / SAMPLES - mean * mean).max(0.0));
         let psr = if sd > 0.0 { (best - mean) / sd } else { 0.0 };
         Some(Response { peak: best, shift: ((signed(c) + dc) * sx, (signed(r) + dr) * sy), psr })
+    }
+}
+
+impl CorrelationFilter {
+    /// `A` and `B` at `at`.
+    fn entry(&self, at: Slot) -> (Complex32, Real) {
+        let a = self.num.get(at.row).and_then(|n| n.get(at.col)).copied().unwrap_or_default();
+        let b = match at.part {
+            Part::Im => self.den.1.get(at.row / (GRID / 2)),
+            _ => self.den.0.get(at.row).and_then(|d| d.get(at.col)),
+        };
+        let a = match at.part {
+            Part::Whole if at.mirrored => a.conj(),
+            Part::Whole => a,
+            Part::Re => Complex32::new(a.re, 0.0),
+            Part::Im => Complex32::new(a.im, 0.0),
+        };
+        (a, b.copied().unwrap_or(0.0))
     }
 }
 
@@ -554,6 +643,45 @@ mod tests {
         // f32 against f64: a few units of f32's precision (1.2e-7) of the
         // largest bin per butterfly stage.
         assert!(worst < 1e-5 * largest, "largest difference from the direct DFT: {worst} (largest bin {largest})");
+    }
+
+    #[test]
+    fn the_packed_filter_keeps_every_entry_of_the_spectrum() {
+        // Reason: a cross-check of the packing against the definition. A
+        // filter learnt from one window (its first, so learnt whole) must
+        // hold `A = G F*` and `B = |F|²` at every entry of the half
+        // spectrum, the mirrored rows of the edge columns included (read
+        // back as conjugates of what is kept); that also checks the
+        // Hermitian symmetry the packing rests on, on a real window's FFT.
+        // And the learnt entries fill the packed arrays one to one.
+        let px = texture(0.0, 0.0, WAVES);
+        let (f, e) = (frame(&px), target());
+        let mut work = EMPTY;
+        assert!(transform(&mut work, &f, &e, 2.0));
+        let mut filter = CorrelationFilter::new();
+        filter.learn(&f, &e, 2.0, 0.05);
+        let largest = work.iter().flatten().map(|v| v.norm_sqr()).fold(0.0, Real::max);
+        for (r, row) in work.iter().enumerate() {
+            for (c, v) in row.iter().enumerate() {
+                let (a, b) = filter.entry(slot(r, c));
+                let want = v.conj() * (PEAK[r] * PEAK[c]);
+                assert!((a - want).norm_sqr().sqrt() < 1e-5 * largest.sqrt(), "A at ({r}, {c}): {a} against {want}");
+                assert!((b - v.norm_sqr()).abs() < 1e-5 * largest, "B at ({r}, {c}): {b} against {}", v.norm_sqr());
+            }
+        }
+        let mut used = std::collections::HashSet::new();
+        for r in 0..GRID {
+            for c in 0..COLS {
+                let at = slot(r, c);
+                if !at.mirrored {
+                    assert!(at.row < GRID && at.col < COLS - 1, "({r}, {c}) -> {at:?}");
+                    assert!(used.insert((at.row, at.col, at.part == Part::Im)), "({r}, {c}) -> {at:?} twice");
+                }
+            }
+        }
+        // Every complex slot once, and the real rows 0 and GRID / 2 of
+        // column 0 twice (real and imaginary parts).
+        assert_eq!(used.len(), GRID * (COLS - 1) + 2);
     }
 
     #[test]
