@@ -127,7 +127,9 @@ pub struct Config {
     /// particle's similarity, or `None`.
     pub template: Option<TemplateCue>,
     /// A correlation filter on the grey levels around the target (see
-    /// [`CorrelationCue`]; built with the `correlation` feature), or `None`.
+    /// [`CorrelationCue`]; built with the `correlation` feature, a default
+    /// one), or `None`. [`CorrelationCue::MEASURED`] by default where the
+    /// feature is built, `None` where it is not.
     pub correlation: Option<CorrelationCue>,
 }
 
@@ -162,13 +164,19 @@ pub enum Life {
 /// filter's mean state moves `pull` of the way to the peak. A second cue
 /// beside colour that sees texture, as Staple pairs a correlation filter
 /// with a colour score (Bertinetto et al. 2016). Built with the
-/// `correlation` Cargo feature (1.7 KB of RAM in every tracker built with
-/// it, and 1.2 KB more stack while it reads a window); asking for it
-/// without the feature is a configuration error.
+/// `correlation` Cargo feature, a default one (1.5 KB of RAM in every
+/// tracker built with it, and 1.2 KB more stack while it reads a window),
+/// and on in [`Config::default`] where built. Turning it off (`None`)
+/// halves the instructions per frame on a core without an FPU, where its
+/// FFTs run in software; asking for it without the feature is a
+/// configuration error.
 ///
 /// ```
 /// use pftrack::{Config, ConfigError, CorrelationCue, Error, ParamProblem, Tracker};
 ///
+/// // Off: the colour cues alone.
+/// let lean = Config { correlation: None, ..Config::default() };
+/// assert!(Tracker::<100>::new(lean, 1).is_ok());
 /// let config = Config { correlation: Some(CorrelationCue::MEASURED), ..Config::default() };
 /// match Tracker::<100>::new(config, 1) {
 ///     Ok(tracker) => assert_eq!(tracker.config().correlation, Some(CorrelationCue::MEASURED)),
@@ -204,6 +212,13 @@ pub struct CorrelationCue {
     pub scale_step: Real,
     /// The share of the way to the best scale the size moves, in `[0, 1]`.
     pub scale_pull: Real,
+    /// The response's peak-to-sidelobe ratio below which the filter moves
+    /// neither the estimate nor its size, in `[0, 20]`: a window with no
+    /// clear match (MOSSE's own test of a failing filter; about 3 on a
+    /// texture the filter never saw). On a target with no texture of its
+    /// own the window's texture is the background's, and a filter that
+    /// followed it would hold the box to the background.
+    pub min_psr: Real,
 }
 
 impl CorrelationCue {
@@ -211,9 +226,16 @@ impl CorrelationCue {
     /// (docs/accuracy.md): a window twice the box, learnt at 0.05 on every
     /// frame whose confidence exceeds 0.7, a move 0.7 of the way to the
     /// peak, and a size that moves 0.3 of the way to the best of three
-    /// scales 3% apart.
-    pub const MEASURED: CorrelationCue =
-        CorrelationCue { padding: 2.0, rate: 0.05, learn_above: 0.7, pull: 0.7, scale_step: 0.03, scale_pull: 0.3 };
+    /// scales 3% apart, when the response's PSR reaches 3.
+    pub const MEASURED: CorrelationCue = CorrelationCue {
+        padding: 2.0,
+        rate: 0.05,
+        learn_above: 0.7,
+        pull: 0.7,
+        scale_step: 0.03,
+        scale_pull: 0.3,
+        min_psr: 3.0,
+    };
 }
 
 /// The grey-level template cue: each particle's normalised cross-correlation
@@ -444,7 +466,10 @@ impl Default for Config {
             surroundings_rate: 0.05,
             background_weight: Some(BackgroundWeight { strength: 0.5, above: 0.8 }),
             template: None,
-            correlation: None,
+            // On wherever it is built: the second cue that lifts accuracy
+            // on new video (docs/accuracy.md). A build without the feature
+            // gets a default that validates.
+            correlation: if cfg!(feature = "correlation") { Some(CorrelationCue::MEASURED) } else { None },
         }
     }
 }
@@ -560,6 +585,7 @@ impl Config {
             check("correlation.pull", c.pull, 0.0, 1.0)?;
             check("correlation.scale_step", c.scale_step, 0.0, 0.2)?;
             check("correlation.scale_pull", c.scale_pull, 0.0, 1.0)?;
+            check("correlation.min_psr", c.min_psr, 0.0, 20.0)?;
         }
         if self.quadrants && !cfg!(feature = "quadrants") {
             return Err(ConfigError { field: "quadrants", problem: ParamProblem::NotBuilt { feature: "quadrants" } });

@@ -283,12 +283,21 @@ impl CorrelationFilter {
         }
         let eta = if self.learned { rate } else { 1.0 };
         let keep = 1.0 - eta;
-        for ((r, row), &pu) in work.iter().enumerate().zip(PEAK.iter()) {
-            for ((c, f), &pv) in row.iter().enumerate().zip(PEAK.iter()) {
+        // The inner columns, kept as they are, zipped (no bounds test per
+        // entry).
+        for (((row, num), den), &pu) in work.iter().zip(self.num.iter_mut()).zip(self.den.0.iter_mut()).zip(PEAK.iter())
+        {
+            let inner = row.iter().zip(num.iter_mut()).zip(den.iter_mut()).zip(PEAK.iter()).skip(1);
+            for (((f, a), b), &pv) in inner {
+                *a = *a * keep + f.conj() * (pu * pv * eta);
+                *b = *b * keep + (f.re * f.re + f.im * f.im) * eta;
+            }
+        }
+        // The edge columns' rows up to the middle, where their slots say.
+        for ((r, row), &pu) in work.iter().enumerate().zip(PEAK.iter()).take(GRID / 2 + 1) {
+            for c in [0, GRID / 2] {
+                let (Some(f), Some(&pv)) = (row.get(c), PEAK.get(c)) else { continue };
                 let at = slot(r, c);
-                if at.mirrored {
-                    continue;
-                }
                 let (Some(a), Some(b)) = (
                     self.num.get_mut(at.row).and_then(|n| n.get_mut(at.col)),
                     match at.part {
@@ -318,10 +327,17 @@ impl CorrelationFilter {
         if !self.learned || !transform(&mut work, frame, e, padding) {
             return None;
         }
-        for (r, row) in work.iter_mut().enumerate() {
-            for (c, f) in row.iter_mut().enumerate() {
-                let (a, b) = self.entry(slot(r, c));
-                *f = a * *f / (b + LAMBDA);
+        for (r, ((row, num), den)) in work.iter_mut().zip(self.num.iter()).zip(self.den.0.iter()).enumerate() {
+            // The inner columns, zipped (no bounds test per entry).
+            for ((f, a), &b) in row.iter_mut().zip(num.iter()).zip(den.iter()).skip(1) {
+                *f = *a * *f / (b + LAMBDA);
+            }
+            // The edge columns, where their slots say.
+            for c in [0, GRID / 2] {
+                if let Some(f) = row.get_mut(c) {
+                    let (a, b) = self.entry(slot(r, c));
+                    *f = a * *f / (b + LAMBDA);
+                }
             }
         }
         // Inverse along the columns: each row then holds the half spectrum

@@ -995,7 +995,10 @@ fn bhattacharyya<const K: usize>(
 }
 
 /// `ρ` from the sum `Σ 16·sqrt(c(u)) · 4096·sqrt(q(u))` and the counts'
-/// total `C` (not 0), clamped to `[0, 1]`.
+/// total `C` (not 0), clamped to `[0, 1]`. Inlined: it ends every
+/// particle's Bhattacharyya sum (measured: 14 k instructions a frame on the
+/// QVGA audit as a call).
+#[inline(always)]
 fn rho_of(sum: u64, total: u32) -> Real {
     // Σ 16·sqrt(c) · 4096·sqrt(q) / (16·sqrt(C) · 4096)
     let denom = sqrt_q4(total) as Real * 4096.0;

@@ -949,12 +949,16 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             && let Some(response) = correlation.respond(frame, &ellipse, c.padding)
         {
             psr = response.psr;
+            // A response with no clear peak says nothing of where the
+            // target went, nor of its size.
+            let c = if psr < c.min_psr { crate::config::CorrelationCue { pull: 0.0, scale_step: 0.0, ..c } } else { c };
             let (dx, dy) = (c.pull * response.shift.0, c.pull * response.shift.1);
             shift_estimate(&mut ellipse, particles, (dx, dy), frame);
             // The scale: windows one step larger and smaller about the new
             // centre, against the first response, whose peak is already the
             // best match at the present size wherever it lay in the window.
-            if c.scale_step > 0.0 {
+            // Not where the size is decided outside (`search` false).
+            if c.scale_step > 0.0 && search {
                 let mut best = (response.peak, 1.0);
                 for s in [1.0 + c.scale_step, 1.0 / (1.0 + c.scale_step)] {
                     let scaled = Ellipse { hx: ellipse.hx * s, hy: ellipse.hy * s, ..ellipse };
@@ -1411,9 +1415,11 @@ fn shift_estimate<const N: usize>(
     (dx, dy): (Real, Real),
     frame: &Frame<'_>,
 ) {
-    ellipse.cx += dx;
-    ellipse.cy += dy;
     let (w, h) = (frame.width() as Real, frame.height() as Real);
+    // Clamped as the particles are, so that the estimate stays their mean's
+    // image: inside the frame and inside their hull (clamping is monotone).
+    ellipse.cx = crate::scalar::clamp(ellipse.cx + dx, 0.0, w);
+    ellipse.cy = crate::scalar::clamp(ellipse.cy + dy, 0.0, h);
     for p in particles.iter_mut() {
         p.x = crate::scalar::clamp(p.x + dx, 0.0, w);
         p.y = crate::scalar::clamp(p.y + dy, 0.0, h);
@@ -1646,6 +1652,7 @@ mod tests {
             (CorrelationCue { pull: Real::INFINITY, ..m }, "correlation.pull", ParamProblem::NonFinite),
             (CorrelationCue { scale_step: 0.5, ..m }, "correlation.scale_step", ParamProblem::OutOfRange),
             (CorrelationCue { scale_pull: Real::NAN, ..m }, "correlation.scale_pull", ParamProblem::NonFinite),
+            (CorrelationCue { min_psr: -1.0, ..m }, "correlation.min_psr", ParamProblem::OutOfRange),
         ] {
             let err = Tracker::<10>::new(Config { correlation: Some(cue), ..Config::default() }, 1).unwrap_err();
             assert_eq!(err, Error::Config(ConfigError { field, problem }));

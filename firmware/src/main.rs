@@ -208,12 +208,9 @@ fn run() -> bool {
 /// before the tracking loop whose stack is measured.
 #[inline(never)]
 fn make_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
-    // The correlation build runs the default configuration plus the filter.
-    #[cfg(feature = "correlation")]
-    let config = Config { correlation: Some(pftrack::CorrelationCue::MEASURED), ..Config::default() };
-    #[cfg(not(feature = "correlation"))]
-    let config = Config::default();
-    let t = FwTracker::new(config, seed)?;
+    // The default configuration: with the correlation filter where the
+    // build has it (the default), the colour cues alone where it does not.
+    let t = FwTracker::new(Config::default(), seed)?;
     Ok(cortex_m::singleton!(: FwTracker = t))
 }
 

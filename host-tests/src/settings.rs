@@ -56,7 +56,7 @@ pub const KEYS: &[(&str, &str)] = &[
     ),
     (
         "correlation",
-        "off | on | PADDING:RATE:LEARN_ABOVE:PULL[:SCALE_STEP:SCALE_PULL] (correlation filter on the grey levels; on = 2:0.05:0.7:0.7:0.03:0.3)",
+        "off | on | PADDING:RATE:LEARN_ABOVE:PULL[:SCALE_STEP:SCALE_PULL[:MIN_PSR]] (correlation filter on the grey levels; on = 2:0.05:0.7:0.7:0.03:0.3:3)",
     ),
     ("background_weight", "STRENGTH[:ABOVE] | off (colour model weighted against the surroundings; 1 is CBWH)"),
 ];
@@ -261,10 +261,11 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
                 ["off"] => None,
                 ["on"] => Some(pftrack::CorrelationCue::MEASURED),
                 [padding, rate, above, pull, scale @ ..] => {
-                    let (scale_step, scale_pull) = match scale {
-                        [] => (0.0, 0.0),
-                        [step, pull] => (num(key, step)?, num(key, pull)?),
-                        _ => return Err(format!("{key}: `{v}`: a scale search needs SCALE_STEP:SCALE_PULL")),
+                    let (scale_step, scale_pull, min_psr) = match scale {
+                        [] => (0.0, 0.0, 0.0),
+                        [step, pull] => (num(key, step)?, num(key, pull)?, 0.0),
+                        [step, pull, psr] => (num(key, step)?, num(key, pull)?, num(key, psr)?),
+                        _ => return Err(format!("{key}: `{v}`: a scale search needs SCALE_STEP:SCALE_PULL[:MIN_PSR]")),
                     };
                     Some(pftrack::CorrelationCue {
                         padding: num(key, padding)?,
@@ -273,6 +274,7 @@ pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
                         pull: num(key, pull)?,
                         scale_step,
                         scale_pull,
+                        min_psr,
                     })
                 }
                 _ => {
@@ -327,7 +329,7 @@ mod tests {
                 "life" => "appearance",
                 "redetect" => "on",
                 "scene_motion" => "on",
-                "correlation" => "on",
+                "correlation" => "off",
                 "background_weight" => "1",
                 "template" => "0.3:0.05",
                 _ => "0.07",

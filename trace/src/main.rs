@@ -4,7 +4,7 @@
 //! on nothing but the core and the fixture codecs, so it also builds for an
 //! ARMv6 Linux device (see the README).
 //!
-//! Usage: pftrack-trace FIXTURE [SEED [pf|meanshift|kalman]]
+//! Usage: pftrack-trace FIXTURE [SEED [pf|colour|meanshift|kalman]]
 
 use pftrack::{Config, Frame, MeanShift, MeanShiftConfig, Tracker};
 use pftrack_fixture::{HEADER_LEN, Header, RECORD_META_LEN, RecordMeta};
@@ -17,7 +17,7 @@ type FwTracker = Tracker<100>;
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some(path) = args.first() else {
-        eprintln!("usage: pftrack-trace FIXTURE [SEED [pf|meanshift|kalman]]");
+        eprintln!("usage: pftrack-trace FIXTURE [SEED [pf|colour|meanshift|kalman]]");
         return ExitCode::FAILURE;
     };
     let seed = match args.get(1).map(|s| s.parse::<u64>()) {
@@ -45,16 +45,15 @@ fn run(path: &str, seed: u64, kind: &str) -> Result<(), String> {
     file.read_exact(&mut head).map_err(|_| "shorter than a fixture header".to_string())?;
     let h = Header::parse(&head).map_err(|e| e.to_string())?;
     let ms_config = match kind {
-        "pf" | "correlation" => None,
+        "pf" | "colour" => None,
         "meanshift" => Some(MeanShiftConfig::default()),
         "kalman" => Some(MeanShiftConfig::kalman()),
-        _ => return Err(format!("tracker `{kind}` is not pf, correlation, meanshift or kalman")),
+        _ => return Err(format!("tracker `{kind}` is not pf, colour, meanshift or kalman")),
     };
-    // `correlation`: the particle filter with the correlation filter on, as
-    // the firmware built with its `correlation` feature runs it (this
-    // binary must then be built with its own `correlation` feature).
+    // `colour`: the particle filter without the correlation filter, as the
+    // firmware built without its `correlation` feature runs it.
     let config = match kind {
-        "correlation" => Config { correlation: Some(pftrack::CorrelationCue::MEASURED), ..Config::default() },
+        "colour" => Config { correlation: None, ..Config::default() },
         _ => Config::default(),
     };
     let mut tracker = Box::new(FwTracker::new(config, seed).map_err(|e| e.to_string())?);

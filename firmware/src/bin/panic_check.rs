@@ -9,8 +9,8 @@
 //! intersection, exponential likelihood, the degraded-model rule, boundary
 //! cue, likelihood table, scale prior, surroundings-motion test, correlation
 //! filter), and the mean-shift baselines run too;
-//! CI links it with and without `--features all-options`, and with
-//! `--features correlation`, so the proof covers the optional code as well.
+//! CI links it with and without `--features all-options`, and without the
+//! default `correlation` feature, so the proof covers every build's code.
 #![no_std]
 #![no_main]
 

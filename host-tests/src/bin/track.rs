@@ -250,7 +250,7 @@ const VARIANTS: &[(&str, &[&str])] = &[
     ("colour: half background-weighted, every colour", &["background_weight=0.5"]),
     ("colour: fully background-weighted model (CBWH)", &["background_weight=1"]),
     ("cues: + grey template, share 0.3", &["template=0.3:0.05"]),
-    ("cues: + a correlation filter (MOSSE; the `correlation` feature)", &["correlation=on"]),
+    ("cues: without the correlation filter (colour alone)", &["correlation=off"]),
     ("likelihood: adaptive σ, floor 0.02", &["adaptive_sigma=0.02:0.5"]),
     ("likelihood: σ from spread, 4 e-folds", &["spread_sigma=4:0.005:0.5"]),
     ("likelihood: fixed σ 0.2, no ε", &["sigma=0.2", "eps=0"]),
