@@ -1691,6 +1691,27 @@ mod tests {
             let (x, y) = (60.0 + 2.0 * k as Real, 45.0 + k as Real);
             assert!((cx - x).abs() <= 2.0 && (cy - y).abs() <= 2.0, "frame {k}: ({cx}, {cy}) against ({x}, {y})");
         }
+        // Gated at a PSR no response reaches, the filter moves nothing: the
+        // track is the colour cues' alone, bit for bit (the filter still
+        // learns and reports its PSR, which the estimate does not read),
+        // and colour alone cannot follow the texture.
+        let gated = Config { correlation: Some(CorrelationCue { min_psr: 20.0, ..CorrelationCue::MEASURED }), ..cfg };
+        let colour = Config { correlation: None, ..cfg };
+        let (mut a, mut b): (Tracker<60>, Tracker<60>) =
+            (Tracker::new(gated, 1).unwrap(), Tracker::new(colour, 1).unwrap());
+        a.init(&frame(&scene(0)), BOX).unwrap();
+        b.init(&frame(&scene(0)), BOX).unwrap();
+        let mut off = 0;
+        for k in 1..=10 {
+            let (ea, eb) = (a.step(&frame(&scene(k))).unwrap(), b.step(&frame(&scene(k))).unwrap());
+            assert_eq!(ea.ellipse, eb.ellipse, "frame {k}");
+            assert!(a.diagnostics().psr < 20.0);
+            let (cx, cy) = ea.bbox().centre();
+            if (cx - 60.0 - 2.0 * k as Real).abs() > 2.0 || (cy - 45.0 - k as Real).abs() > 2.0 {
+                off += 1;
+            }
+        }
+        assert!(off > 0, "colour alone followed the texture on every frame");
     }
 
     #[test]
