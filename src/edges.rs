@@ -949,6 +949,46 @@ mod tests {
     }
 
     #[test]
+    fn every_pixel_format_reads_the_map_its_lumas_give() {
+        // Reason: cross-check of the per-format luma readers (whole spans
+        // for dense cells, three columns a cell for sparse ones) against
+        // the frame's own per-pixel luma, the definition, in each camera
+        // format, on lattices dense (step 1) and sparse (steps 2 and 3,
+        // checkerboard and full).
+        let (w, h) = (38usize, 29usize);
+        for format in [PixelFormat::Rgb565, PixelFormat::Yuv422, PixelFormat::Gray8, PixelFormat::Rgb888] {
+            let px = crate::testing::noise_bytes(7, w * h * format.bytes_per_pixel());
+            let f = Frame::packed(&px, w, h, format).unwrap();
+            let l = |x: usize, y: usize| f.luma(x, y).unwrap() as i32;
+            for (sampling, step) in [
+                (Sampling::Full, 1),
+                (Sampling::Checkerboard, 1),
+                (Sampling::Full, 2),
+                (Sampling::Full, 3),
+                (Sampling::Checkerboard, 3),
+            ] {
+                let params = EdgeParams { bins: 8, threshold: 60, sampling, step, flat_bin: false };
+                let mut map = EdgeMap::<4096>::new();
+                map.compute(&f, (1, 1, w, h), params);
+                assert_eq!(map.spacing(), 1);
+                let lattice = Lattice::with_step(sampling, step);
+                let mut n = 0;
+                for y in 1..h - 1 {
+                    for x in 1..w - 1 {
+                        if lattice.contains(x, y) {
+                            let (gx, gy) = sobel_at(&l, x, y);
+                            let want = (gx * gx + gy * gy >= 60 * 60).then(|| orientation_bin(gx, gy, 8));
+                            assert_eq!(map.bin_at(x, y), want, "{format:?} {sampling:?} step {step} at ({x}, {y})");
+                            n += 1;
+                        }
+                    }
+                }
+                assert!(n > 10, "{format:?} {sampling:?} step {step}: {n} cells checked");
+            }
+        }
+    }
+
+    #[test]
     fn map_matches_direct_sobel_on_every_lattice() {
         // Reason: cross-check the map (sliding window, shared columns,
         // lattice-indexed cells) against the plain per-pixel definition on a
