@@ -951,14 +951,16 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             psr = response.psr;
             // A response with no clear peak says nothing of where the
             // target went, nor of its size.
-            let c = if psr < c.min_psr { crate::config::CorrelationCue { pull: 0.0, scale_step: 0.0, ..c } } else { c };
-            let (dx, dy) = (c.pull * response.shift.0, c.pull * response.shift.1);
-            shift_estimate(&mut ellipse, particles, (dx, dy), frame);
+            let sure = psr >= c.min_psr;
+            if sure {
+                let (dx, dy) = (c.pull * response.shift.0, c.pull * response.shift.1);
+                shift_estimate(&mut ellipse, particles, (dx, dy), frame);
+            }
             // The scale: windows one step larger and smaller about the new
             // centre, against the first response, whose peak is already the
             // best match at the present size wherever it lay in the window.
             // Not where the size is decided outside (`search` false).
-            if c.scale_step > 0.0 && search {
+            if sure && c.scale_step > 0.0 && search {
                 let mut best = (response.peak, 1.0);
                 for s in [1.0 + c.scale_step, 1.0 / (1.0 + c.scale_step)] {
                     let scaled = Ellipse { hx: ellipse.hx * s, hy: ellipse.hy * s, ..ellipse };
