@@ -232,6 +232,7 @@ const VARIANTS: &[(&str, &[&str])] = &[
     ("life: confidence, lost below 0.8, found above 0.85", &["life=confidence:0.8:0.85"]),
     ("life: + re-detection while lost", &["redetect=on"]),
     ("life: + a box moving with its surroundings is a miss", &["scene_motion=on"]),
+    ("life: + moving with its surroundings, lost below 0.7", &["scene_motion=on", "life=confidence:0.7:0.8"]),
     ("size: not searched (random walk only)", &["size=off"]),
     ("size: searched by contrast only", &["size=0.02:0:0.03:0.05"]),
     ("size: scale only (aspect kept)", &["size=0.02:1:scale:0.05"]),
