@@ -353,6 +353,28 @@ fn luma_span(frame: &Frame<'_>, row: &[u8], span: (usize, usize), dst: &mut [u8]
     }
 }
 
+/// [`luma_span`] in format `P`.
+fn luma_span_of<P: PixelRead>(row: &[u8], (xa, xb): (usize, usize), dst: &mut [u8]) {
+    match P::pixels(row).and_then(|px| px.get(xa..xb)) {
+        // Zipped slices: no bounds test per pixel.
+        Some(px) => {
+            // Two pixels per iteration: half the loop's overhead.
+            let (pairs, last) = px.as_chunks::<2>();
+            for (v, &[p, q]) in dst.as_chunks_mut::<2>().0.iter_mut().zip(pairs) {
+                *v = [P::px_luma(p), P::px_luma(q)];
+            }
+            if let (Some(v), Some(&p)) = (dst.get_mut(2 * pairs.len()), last.first()) {
+                *v = P::px_luma(p);
+            }
+        }
+        None => {
+            for (i, v) in dst.iter_mut().enumerate().take(xb.saturating_sub(xa)) {
+                *v = P::luma(row, xa + i).unwrap_or(0);
+            }
+        }
+    }
+}
+
 /// The lumas of columns `x − 1`, `x`, `x + 1` for `x` = `x0`, `x0 + dx`,
 /// … of `row` (a row of `frame`), three to a cell, into `dst` (0 where a
 /// column is outside the row): one format dispatch per row, then that
@@ -421,28 +443,6 @@ fn sparse_cells(
         };
         put(out, c, v, nibbles);
         x += dx;
-    }
-}
-
-/// [`luma_span`] in format `P`.
-fn luma_span_of<P: PixelRead>(row: &[u8], (xa, xb): (usize, usize), dst: &mut [u8]) {
-    match P::pixels(row).and_then(|px| px.get(xa..xb)) {
-        // Zipped slices: no bounds test per pixel.
-        Some(px) => {
-            // Two pixels per iteration: half the loop's overhead.
-            let (pairs, last) = px.as_chunks::<2>();
-            for (v, &[p, q]) in dst.as_chunks_mut::<2>().0.iter_mut().zip(pairs) {
-                *v = [P::px_luma(p), P::px_luma(q)];
-            }
-            if let (Some(v), Some(&p)) = (dst.get_mut(2 * pairs.len()), last.first()) {
-                *v = P::px_luma(p);
-            }
-        }
-        None => {
-            for (i, v) in dst.iter_mut().enumerate().take(xb.saturating_sub(xa)) {
-                *v = P::luma(row, xa + i).unwrap_or(0);
-            }
-        }
     }
 }
 
