@@ -1241,6 +1241,33 @@ mod tests {
         }
     }
 
+    /// The frame size of [`noise_scenes`].
+    const NOISE: (usize, usize) = (90, 70);
+
+    /// Random RGB565 and GRAY8 pixels of a frame of [`NOISE`] size, and a
+    /// source of ellipses inside it, across its border, off it, tiny and
+    /// large: the cases the region walks' cross-checks compare.
+    fn noise_scenes(seed: u32) -> (Vec<u8>, Vec<u8>, impl FnMut() -> Ellipse) {
+        let (w, h) = NOISE;
+        let mut state = crate::testing::lcg(seed);
+        let mut next = move || state() >> 8;
+        let rgb: Vec<u8> = (0..w * h * 2).map(|_| next() as u8).collect();
+        let grey: Vec<u8> = (0..w * h).map(|_| next() as u8).collect();
+        let ellipse = move || Ellipse {
+            cx: (next() % 1300) as f32 / 10.0 - 20.0,
+            cy: (next() % 1100) as f32 / 10.0 - 20.0,
+            hx: (next() % 400) as f32 / 10.0 + 0.2,
+            hy: (next() % 400) as f32 / 10.0 + 0.2,
+        };
+        (rgb, grey, ellipse)
+    }
+
+    /// The frames of [`noise_scenes`]' pixels.
+    fn noise_frames<'a>(rgb: &'a [u8], grey: &'a [u8]) -> [Frame<'a>; 2] {
+        let (w, h) = NOISE;
+        [Frame::packed(rgb, w, h, PixelFormat::Rgb565).unwrap(), Frame::packed(grey, w, h, PixelFormat::Gray8).unwrap()]
+    }
+
     #[test]
     fn checkerboard_walk_equals_the_general_walk() {
         // Reason: a cross-check of two implementations of the same walk: the
@@ -1248,15 +1275,9 @@ mod tests {
         // (any lattice) must give identical colour and edge counts and
         // totals, on random RGB565 and GRAY8 scenes, for ellipses inside,
         // across the border, off the frame, tiny and large.
-        let (w, h) = (90usize, 70usize);
-        let mut state = crate::testing::lcg(7);
-        let mut next = move || state() >> 8;
-        let rgb: Vec<u8> = (0..w * h * 2).map(|_| next() as u8).collect();
-        let grey: Vec<u8> = (0..w * h).map(|_| next() as u8).collect();
-        let frames = [
-            Frame::packed(&rgb, w, h, PixelFormat::Rgb565).unwrap(),
-            Frame::packed(&grey, w, h, PixelFormat::Gray8).unwrap(),
-        ];
+        let (rgb, grey, mut ellipse) = noise_scenes(7);
+        let frames = noise_frames(&rgb, &grey);
+        let (w, h) = NOISE;
         let lattice = Lattice::CHECKERBOARD;
         let mut checked = 0;
         for f in &frames {
@@ -1264,12 +1285,7 @@ mod tests {
             map.compute_on(f, (0, 0, w, h), 8, 60, false, lattice);
             let rows = map.checker_rows().expect("4-bit cells at full resolution");
             for _ in 0..300 {
-                let e = Ellipse {
-                    cx: (next() % 1300) as f32 / 10.0 - 20.0,
-                    cy: (next() % 1100) as f32 / 10.0 - 20.0,
-                    hx: (next() % 400) as f32 / 10.0 + 0.2,
-                    hy: (next() % 400) as f32 / 10.0 + 0.2,
-                };
+                let e = ellipse();
                 let (mut c1, mut e1) = ([0u32; 512], [0u32; MAX_EDGE_BINS]);
                 let (mut c2, mut e2) = ([0u32; 512], [0u32; MAX_EDGE_BINS]);
                 let (t1, t2) = match f.format() {
@@ -1292,21 +1308,16 @@ mod tests {
     #[test]
     fn pair_rows_equal_the_indexed_rows() {
         // Reason: a cross-check of two implementations of one walk: rows of
-        // whole cell bytes (`pair_row`, with the samples it pads at either
-        // end) and the per-sample indexed loop must give identical colour
+        // whole cell bytes (`pair_row`, with a lone sample at either end
+        // where its cell shares a byte with one outside the row) and the
+        // per-sample indexed loop must give identical colour
         // and edge counts and totals, on random RGB565 and GRAY8 scenes, on
         // the lattices a target's size selects (checker and full, steps 1
         // to 3), for ellipses inside, across the border, off the frame, tiny
         // and large.
-        let (w, h) = (90usize, 70usize);
-        let mut state = crate::testing::lcg(11);
-        let mut next = move || state() >> 8;
-        let rgb: Vec<u8> = (0..w * h * 2).map(|_| next() as u8).collect();
-        let grey: Vec<u8> = (0..w * h).map(|_| next() as u8).collect();
-        let frames = [
-            Frame::packed(&rgb, w, h, PixelFormat::Rgb565).unwrap(),
-            Frame::packed(&grey, w, h, PixelFormat::Gray8).unwrap(),
-        ];
+        let (rgb, grey, mut ellipse) = noise_scenes(11);
+        let frames = noise_frames(&rgb, &grey);
+        let (w, h) = NOISE;
         let (mut paired, mut rows) = (0u32, 0u32);
         for f in &frames {
             for (sampling, step) in
@@ -1317,12 +1328,7 @@ mod tests {
                 map.compute_on(f, (0, 0, w, h), 8, 60, false, lattice);
                 assert!(map.nibbles(), "4-bit cells");
                 for _ in 0..200 {
-                    let e = Ellipse {
-                        cx: (next() % 1300) as f32 / 10.0 - 20.0,
-                        cy: (next() % 1100) as f32 / 10.0 - 20.0,
-                        hx: (next() % 400) as f32 / 10.0 + 0.2,
-                        hy: (next() % 400) as f32 / 10.0 + 0.2,
-                    };
+                    let e = ellipse();
                     let (mut c1, mut e1) = ([0u32; 512], [0u32; MAX_EDGE_BINS]);
                     let (mut c2, mut e2) = ([0u32; 512], [0u32; MAX_EDGE_BINS]);
                     let (mut c3, mut e3) = ([0u32; 512], [0u32; MAX_EDGE_BINS]);
