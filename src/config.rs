@@ -409,6 +409,10 @@ pub const MIN_EDGE_THRESHOLD: u16 = 10;
 /// [`EdgeCue`] may ask for, plus the flat bin.
 pub const MAX_EDGE_BINS: usize = 17;
 
+/// The words of the edge model's bitmap of non-empty bins
+/// ([`crate::Model`]'s `W`): one bit per bin of its [`MAX_EDGE_BINS`].
+pub const EDGE_SUPPORT_WORDS: usize = MAX_EDGE_BINS.div_ceil(32);
+
 impl Default for Config {
     /// The defaults, chosen by the ablation on the real sequences' *tune*
     /// split and kept where the *check* split agrees (docs/accuracy.md):

@@ -776,42 +776,53 @@ pub enum Similarity {
 /// `q(u)` is stored in units of `2^-16` and `sqrt(q(u))` in units of `2^-12`.
 /// A model of a quadrant layout holds four blocks of `K / 4` bins, each
 /// normalised on its own.
+///
+/// Its non-empty bins are kept as a bitmap of `W` 32-bit words (see
+/// [`SUPPORT_WORDS`]): one bit per bin up to `32·W` bins, one per group of
+/// bins beyond.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Model<const K: usize> {
+pub struct Model<const K: usize, const W: usize = SUPPORT_WORDS> {
     q: [u16; K],
     sqrt_q: [u16; K],
     /// Where `q` is non-zero, for sums that only need those bins.
-    support: Support,
+    support: Support<W>,
     segments: u8,
 }
 
+/// The words of a [`Model`]'s bitmap of non-empty bins unless said
+/// otherwise: 16, one bit per bin of the 512 RGB bins. A model of fewer
+/// bins may take fewer words (the tracker's edge model, of
+/// [`MAX_EDGE_BINS`] bins, takes one: 60 bytes of RAM less).
+pub const SUPPORT_WORDS: usize = 16;
+
 /// The non-empty bins of a model, as one bit per group of
-/// `K.div_ceil(512)` bins (one bit per bin for the usual `K <= 512`):
-/// 64 bytes for any `K`.
+/// `K.div_ceil(32·W)` bins (one bit per bin for `K <= 32·W`): `4·W` bytes
+/// for any `K`.
 ///
 /// A target's colours fill few of the 512 RGB bins (tens, on the real
 /// sequences), and the Bhattacharyya sum of every particle needs only
 /// those: visiting them through the bitmap is what keeps the sum from
 /// costing a pass over all 512 bins per particle.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub(crate) struct Support {
-    words: [u32; 16],
+pub(crate) struct Support<const W: usize = SUPPORT_WORDS> {
+    words: [u32; W],
 }
 
-impl Support {
-    const GROUPS: usize = 16 * 32;
+impl<const W: usize> Support<W> {
+    const GROUPS: usize = W * 32;
 
     /// Bins per bit for `K` bins.
     const fn group_len<const K: usize>() -> usize {
         if K <= Self::GROUPS { 1 } else { K.div_ceil(Self::GROUPS) }
     }
 
-    const EMPTY: Self = Support { words: [0; 16] };
+    const EMPTY: Self = Support { words: [0; W] };
 
     /// The support of the non-zero values of `v`.
     fn of<const K: usize>(v: &[u16; K]) -> Self {
-        let g = Self::group_len::<K>();
-        let mut words = [0u32; 16];
+        // At least 1 (a model of no words has no bins in its support).
+        let g = Self::group_len::<K>().max(1);
+        let mut words = [0u32; W];
         for (i, _) in v.iter().enumerate().filter(|&(_, &x)| x != 0) {
             let group = i / g;
             if let Some(w) = words.get_mut(group / 32) {
@@ -825,7 +836,7 @@ impl Support {
     /// support, in increasing order.
     #[inline(always)]
     fn for_each<const K: usize>(&self, lo: usize, hi: usize, mut f: impl FnMut(usize)) {
-        let g = Self::group_len::<K>();
+        let g = Self::group_len::<K>().max(1);
         // Only the words that hold groups (one for an edge model's 17 bins).
         let used = K.div_ceil(g).div_ceil(32);
         for (i, &word) in self.words.iter().enumerate().take(used) {
@@ -856,7 +867,9 @@ impl<const K: usize> Model<K> {
     pub fn from_histogram(h: &Histogram<K>) -> Option<Self> {
         Self::from_segments(h, 1)
     }
+}
 
+impl<const K: usize, const W: usize> Model<K, W> {
     /// The model of a histogram laid out in `segments` equal blocks (1 or 4),
     /// each normalised on its own; `None` if any block is empty.
     pub(crate) fn from_segments(h: &Histogram<K>, segments: u8) -> Option<Self> {
@@ -1014,7 +1027,7 @@ impl<const K: usize> Model<K> {
 
     /// The model's non-empty bins, for [`Clear::Support`]; `None` for a
     /// model of several segments, whose comparisons need every bin.
-    pub(crate) fn support(&self) -> Option<&Support> {
+    pub(crate) fn support(&self) -> Option<&Support<W>> {
         (self.segments <= 1).then_some(&self.support)
     }
 
@@ -1032,7 +1045,7 @@ impl<const K: usize> Model<K> {
     /// bin and one division per comparison. The result is within 0.005 of
     /// the exact value (tested against an f64 implementation).
     pub fn bhattacharyya(&self, h: &Histogram<K>) -> Real {
-        bhattacharyya::<K>(&h.counts, &self.sqrt_q, h.total, (&self.support, 0))
+        bhattacharyya::<K, W>(&h.counts, &self.sqrt_q, h.total, (&self.support, 0))
     }
 
     /// The histogram intersection `Σ min(p(u), q(u))`, in `[0, 1]`: 1 for
@@ -1050,7 +1063,7 @@ impl<const K: usize> Model<K> {
         let blocks = h.counts.chunks(len).zip(self.q.chunks(len)).zip(self.sqrt_q.chunks(len));
         for (j, (o, ((c, q), sq))) in out.iter_mut().zip(blocks).enumerate() {
             let total = segment_total(h, c, self.segments);
-            *o = compare_block::<K>(c, (q, sq), total, kind, (&self.support, j * len));
+            *o = compare_block::<K, W>(c, (q, sq), total, kind, (&self.support, j * len));
         }
         out
     }
@@ -1066,15 +1079,15 @@ fn segment_total<const K: usize>(h: &Histogram<K>, c: &[u32], segments: u8) -> u
 /// holds one copy of each sum rather than one per quadrant (measured: +3 KB
 /// of Cortex-M4 code when inlined).
 #[inline(never)]
-fn compare_block<const K: usize>(
+fn compare_block<const K: usize, const W: usize>(
     c: &[u32],
     (q, sq): (&[u16], &[u16]),
     total: u32,
     kind: Similarity,
-    support: (&Support, usize),
+    support: (&Support<W>, usize),
 ) -> Real {
     match kind {
-        Similarity::Bhattacharyya => bhattacharyya::<K>(c, sq, total, support),
+        Similarity::Bhattacharyya => bhattacharyya::<K, W>(c, sq, total, support),
         Similarity::Intersection => intersection(c, q, total),
     }
 }
@@ -1082,11 +1095,11 @@ fn compare_block<const K: usize>(
 /// `Σ sqrt(c(u)/C) sqrt(q(u))` from counts, their total and the model's
 /// roots, for the block of bins from `first` (of a `K`-bin model whose
 /// non-zero bins are `support`): only the model's non-zero bins are visited.
-fn bhattacharyya<const K: usize>(
+fn bhattacharyya<const K: usize, const W: usize>(
     counts: &[u32],
     sqrt_q: &[u16],
     total: u32,
-    (support, first): (&Support, usize),
+    (support, first): (&Support<W>, usize),
 ) -> Real {
     if total == 0 {
         return 0.0;
@@ -1174,7 +1187,7 @@ impl<const K: usize> PlainModel<K> {
 
     /// Makes these the bins of `model`, in place (a new value would pass
     /// `2·K` bytes through the stack).
-    pub(crate) fn copy_from(&mut self, model: &Model<K>) {
+    pub(crate) fn copy_from<const W: usize>(&mut self, model: &Model<K, W>) {
         self.q.copy_from_slice(&model.q);
         self.segments = model.segments;
     }
@@ -1564,7 +1577,7 @@ mod tests {
         for segments in [1u8, 4] {
             for round in 0..30 {
                 let learnt = random(40);
-                let Some(model) = Model::from_segments(&learnt, segments) else { continue };
+                let Some(model) = Model::<512>::from_segments(&learnt, segments) else { continue };
                 let mut plain = PlainModel::zero();
                 plain.copy_from(&model);
                 for h in [random(round % 10), random(60), Histogram::new(), learnt.clone()] {
@@ -1670,7 +1683,7 @@ mod tests {
             h.add(q * 128 + 5, 100 * (q as u32 + 1));
             h.add(q * 128 + 9, 50);
         }
-        let m = Model::from_segments(&h, 4).unwrap();
+        let m = Model::<512>::from_segments(&h, 4).unwrap();
         for q in 0..4 {
             let sum: u32 = m.bins()[q * 128..(q + 1) * 128].iter().map(|&v| v as u32).sum();
             assert!((65530..=65536).contains(&sum), "block {q}: {sum}");
@@ -1692,7 +1705,7 @@ mod tests {
         // An empty block has no model.
         let mut gap = Histogram::<512>::new();
         gap.add(5, 1);
-        assert!(Model::from_segments(&gap, 4).is_none());
+        assert!(Model::<512>::from_segments(&gap, 4).is_none());
     }
 
     #[test]

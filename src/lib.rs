@@ -90,15 +90,15 @@ pub mod tracker;
 
 pub use colour::Binning;
 pub use config::{
-    BackgroundWeight, BoundaryCue, Config, CorrelationCue, EdgeCue, Life, ModelUpdate, ShiftSearch, SizeSearch,
-    TableMode, TemplateCue,
+    BackgroundWeight, BoundaryCue, Config, CorrelationCue, EDGE_SUPPORT_WORDS, EdgeCue, Life, MAX_EDGE_BINS,
+    ModelUpdate, ShiftSearch, SizeSearch, TableMode, TemplateCue,
 };
 pub use edges::{EdgeMap, EdgeParams};
 pub use error::{ChromaPlane, ConfigError, Error, FrameError, ParamProblem, RegionError};
 pub use filter::{Dynamics, Particle, Resampling};
 pub use frame::{Frame, PixelFormat, Plane};
 pub use geometry::{BoundingBox, Ellipse};
-pub use histogram::{Histogram, Model, Similarity};
+pub use histogram::{Histogram, Model, SUPPORT_WORDS, Similarity};
 pub use likelihood::{Combination, Likelihood, Shape, Sigma};
 pub use meanshift::{MeanShift, MeanShiftConfig, Prediction};
 pub use region::Sampling;

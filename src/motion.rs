@@ -54,12 +54,11 @@ const RATE: Real = 0.2;
 /// the motion measured from them.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct SceneMotion {
-    /// Luma of the box's lattice points, and which lay in the frame.
+    /// Luma of the box's lattice points (0 for those outside the frame:
+    /// which they are follows from the box, [`Lattice::rows_in`]).
     inner: [u8; BOX_POINTS],
-    inner_in: Rows,
-    /// Luma of the ring's lattice points, and which lay in the frame.
+    /// Luma of the ring's lattice points (the same).
     outer: [u8; RING_POINTS],
-    outer_in: Rows,
     /// The box they were read on, if any was (a box with no lattice is
     /// not).
     at: Option<Ellipse>,
@@ -68,8 +67,8 @@ pub(crate) struct SceneMotion {
     against: Real,
     ring: Real,
     /// The ring's last shift, where its search starts (scenes move
-    /// smoothly).
-    last: (i32, i32),
+    /// smoothly); 16 bits, as frames are (`MAX_DIMENSION`).
+    last: (i16, i16),
     /// Sum of the box's motion against the ring over the first tracked
     /// frames, and how many tracked frames were measured.
     early: Real,
@@ -119,6 +118,22 @@ impl Lattice {
         if self.hole && (GRID / 4..GRID - GRID / 4).contains(&j) { &SIDES } else { &ALL }
     }
 
+    /// Which points lie in a `width × height` frame: those [`sample`]
+    /// reads a pixel for (a frame's rows hold `width` pixels each).
+    fn rows_in(&self, (width, height): (usize, usize)) -> Rows {
+        let mut rows = [0u8; GRID];
+        for (j, (r, &y)) in rows.iter_mut().zip(self.ys.iter()).enumerate() {
+            if usize::try_from(y).is_ok_and(|y| y < height) {
+                for &i in self.cols(j) {
+                    if self.xs.get(i).is_some_and(|&x| usize::try_from(x).is_ok_and(|x| x < width)) {
+                        *r |= 1 << (i % GRID);
+                    }
+                }
+            }
+        }
+        rows
+    }
+
     /// Calls `f(row, column, luma)` for each point, row by row (the
     /// window's middle left out), with its pixel shifted by `(dx, dy)`:
     /// `None` outside the frame. Any format, a pixel at a time (the
@@ -134,19 +149,14 @@ impl Lattice {
     }
 }
 
-/// Reads the lattice's pixels into `out`, returning which lay in the frame.
-fn sample(frame: &Frame<'_>, lattice: &Lattice, out: &mut [u8]) -> Rows {
-    let mut rows = [0u8; GRID];
+/// Reads the lattice's pixels into `out` (0 for those outside the frame).
+fn sample(frame: &Frame<'_>, lattice: &Lattice, out: &mut [u8]) {
     let mut slots = out.iter_mut();
-    lattice.read(frame, (0, 0), |j, i, luma| {
+    lattice.read(frame, (0, 0), |_, _, luma| {
         if let Some(v) = slots.next() {
             *v = luma.unwrap_or(0);
-            if let (Some(_), Some(r)) = (luma, rows.get_mut(j)) {
-                *r |= 1 << (i % GRID);
-            }
         }
     });
-    rows
 }
 
 /// The mean absolute difference between the stored samples and `frame` at
@@ -308,9 +318,7 @@ impl SceneMotion {
     pub(crate) const fn new() -> Self {
         SceneMotion {
             inner: [0; BOX_POINTS],
-            inner_in: [0; GRID],
             outer: [0; RING_POINTS],
-            outer_in: [0; GRID],
             at: None,
             against: 0.0,
             ring: 0.0,
@@ -331,8 +339,8 @@ impl SceneMotion {
             self.at = None;
             return;
         };
-        self.inner_in = sample(frame, &inner, &mut self.inner);
-        self.outer_in = sample(frame, &outer, &mut self.outer);
+        sample(frame, &inner, &mut self.inner);
+        sample(frame, &outer, &mut self.outer);
         self.at = Some(*e);
     }
 
@@ -351,13 +359,19 @@ impl SceneMotion {
             // costs a third less than with diagonals (about 35,000
             // instructions a QVGA frame on the Cortex-M4F), with the same
             // reports on the real sequences.
+            // The frame has the size of the one the samples were read on
+            // (the tracker refuses another), so the points that lay in it
+            // are those that lie in this one.
+            let size = (frame.width(), frame.height());
+            let last = (self.last.0 as i32, self.last.1 as i32);
             let outer = Lattice::of(&at, true)
-                .and_then(|l| best_shift(frame, &l, (&self.outer, &self.outer_in), self.last, &[2, 1], true));
+                .and_then(|l| best_shift(frame, &l, (&self.outer, &l.rows_in(size)), last, &[2, 1], true));
             let inner = outer.and_then(|(r, _)| {
                 let l = Lattice::of(&at, false)?;
-                best_shift(frame, &l, (&self.inner, &self.inner_in), r, &[1, 1, 1], false)
+                best_shift(frame, &l, (&self.inner, &l.rows_in(size)), r, &[1, 1, 1], false)
             });
-            self.last = outer.map_or((0, 0), |(r, _)| r);
+            let clamp = |v: i32| v.clamp(i16::MIN as i32, i16::MAX as i32) as i16;
+            self.last = outer.map_or((0, 0), |((x, y), _)| (clamp(x), clamp(y)));
             if let (Some((_, (bx, by))), Some((_, (rx, ry)))) = (inner, outer) {
                 let hypot = |x: Real, y: Real| sqrt(x * x + y * y);
                 let (against, ring) = (hypot(bx - rx, by - ry), hypot(rx, ry));
@@ -430,6 +444,45 @@ mod tests {
     }
 
     #[test]
+    fn the_points_in_the_frame_are_those_read() {
+        // Reason: a cross-check of two ways to say which lattice points lie
+        // in the frame: the masks `rows_in` derives from the box and the
+        // frame's size, and the points whose pixel the frame's reads return,
+        // in every packed format, for boxes inside, across each border,
+        // off the frame, tiny and larger than it.
+        let px = crate::testing::noise_bytes(5, W * H * 3);
+        let mut next = crate::testing::lcg(9);
+        let mut checked = (0, 0);
+        for format in [PixelFormat::Rgb565, PixelFormat::Rgb888, PixelFormat::Yuv422, PixelFormat::Gray8] {
+            let f = Frame::packed(&px[..W * H * format.bytes_per_pixel()], W, H, format).unwrap();
+            for _ in 0..200 {
+                let mut r = |m: u32| (next() >> 8) % m;
+                let e = Ellipse {
+                    cx: r(2 * W as u32) as Real - (W / 2) as Real + 0.3,
+                    cy: r(2 * H as u32) as Real - (H / 2) as Real + 0.6,
+                    hx: r(200) as Real + 0.5,
+                    hy: r(150) as Real + 0.5,
+                };
+                for window in [false, true] {
+                    let Some(l) = Lattice::of(&e, window) else { continue };
+                    let mut read = [0u8; GRID];
+                    l.read(&f, (0, 0), |j, i, luma| {
+                        if let (Some(_), Some(r)) = (luma, read.get_mut(j)) {
+                            *r |= 1 << i;
+                        }
+                    });
+                    assert_eq!(l.rows_in((W, H)), read, "{format:?} {e:?} {window}");
+                    let n: u32 = read.iter().map(|r| r.count_ones()).sum();
+                    checked = (checked.0 + (n == 0 || n == 64 || (window && n == 48)) as u32, checked.1 + 1);
+                }
+            }
+        }
+        // Some boxes lie partly outside the frame (neither none nor all
+        // of their points in it).
+        assert!(checked.1 - checked.0 >= 100, "{checked:?}");
+    }
+
+    #[test]
     fn a_pan_is_measured_to_a_fraction_of_a_pixel_and_a_box_on_the_scene_moves_with_it() {
         // Reason: ground truth by construction. The second frame is the
         // first with its content moved 3 px right and 2 px up, so the ring's
@@ -462,7 +515,8 @@ mod tests {
         let (a, b) = (scene((0.0, 0.0), None), scene((2.5, 0.0), None));
         let lattice = Lattice::of(&boxed((60, 50)), true).unwrap();
         let mut stored = [0u8; RING_POINTS];
-        let rows = sample(&frame(&a), &lattice, &mut stored);
+        sample(&frame(&a), &lattice, &mut stored);
+        let rows = lattice.rows_in((W, H));
         let (whole, (fx, fy)) = best_shift(&frame(&b), &lattice, (&stored, &rows), (0, 0), &[2, 1], true).unwrap();
         assert!(whole == (2, 0) || whole == (3, 0), "{whole:?}");
         assert!((fx - 2.5).abs() < 0.25, "{fx}");

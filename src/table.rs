@@ -17,7 +17,7 @@
 //! The ablation (`track ablate`) and README give the measured figures.
 
 use crate::colour::{Binning, levels_bin};
-use crate::config::MAX_EDGE_BINS;
+use crate::config::{EDGE_SUPPORT_WORDS, MAX_EDGE_BINS};
 use crate::edges::EdgeMap;
 use crate::frame::Frame;
 use crate::histogram::{Histogram, Model};
@@ -163,7 +163,7 @@ impl<const T: usize> Table<T> {
         bins: &Bins<'_, E>,
         ext: &Extents,
         model: &Model<K>,
-        edge_model: Option<&Model<MAX_EDGE_BINS>>,
+        edge_model: Option<&Model<MAX_EDGE_BINS, EDGE_SUPPORT_WORDS>>,
         combination: Combination,
         area: (i32, i32, i32, i32),
         spacing: i32,

@@ -1,7 +1,7 @@
 //! The tracker: a particle filter over colour histograms with an adaptive
 //! model and explicit searching / tracking / lost states.
 
-use crate::config::{Config, Life, MAX_EDGE_BINS, ModelUpdate, TableMode};
+use crate::config::{Config, EDGE_SUPPORT_WORDS, Life, MAX_EDGE_BINS, ModelUpdate, TableMode};
 #[cfg(feature = "correlation")]
 use crate::correlation::CorrelationFilter;
 use crate::edges::EdgeMap;
@@ -186,7 +186,7 @@ struct Models<const K: usize> {
     colour: Model<K>,
     /// `None` when the edge cue is off, or the target has no edge above the
     /// threshold (a flat target: its edge histogram says nothing).
-    edge: Option<Model<MAX_EDGE_BINS>>,
+    edge: Option<Model<MAX_EDGE_BINS, EDGE_SUPPORT_WORDS>>,
     /// Which colours are the target's rather than its surroundings'.
     fg: Foreground<K>,
     /// The grey-level template.
@@ -560,7 +560,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
 
     /// The edge-orientation model, once initialised with the edge cue on and
     /// a target that has edges.
-    pub fn edge_model(&self) -> Option<&Model<MAX_EDGE_BINS>> {
+    pub fn edge_model(&self) -> Option<&Model<MAX_EDGE_BINS, EDGE_SUPPORT_WORDS>> {
         self.target.as_ref().and_then(|t| t.models.edge.as_ref())
     }
 
@@ -663,11 +663,11 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             layout.levels = crate::bins::choose_levels(&mut sc.colour, frame, &e, sc.lattice, segments);
         }
         sc.observe(frame, &e, &layout, cfg.edges.is_some(), Clear::All);
-        if !Model::can_learn(&sc.colour, segments) {
+        if !Model::<K>::can_learn(&sc.colour, segments) {
             return Err(RegionError::NoPixels.into());
         }
         // Nothing fails from here on.
-        let edge = if cfg.edges.is_some() { Model::from_histogram(&sc.edge) } else { None };
+        let edge = if cfg.edges.is_some() { Model::from_segments(&sc.edge, 1) } else { None };
         let target = slot.insert(Target {
             models: Models {
                 layout,
