@@ -811,17 +811,19 @@ pub(crate) struct Support<const W: usize = SUPPORT_WORDS> {
 impl<const W: usize> Support<W> {
     const GROUPS: usize = W * 32;
 
-    /// Bins per bit for `K` bins.
+    /// Bins per bit for `K` bins (at least 1).
     const fn group_len<const K: usize>() -> usize {
-        if K <= Self::GROUPS { 1 } else { K.div_ceil(Self::GROUPS) }
+        // A support of no words is refused when built (`of`); the test of
+        // `GROUPS` keeps the division defined regardless.
+        if K <= Self::GROUPS || Self::GROUPS == 0 { 1 } else { K.div_ceil(Self::GROUPS) }
     }
 
     const EMPTY: Self = Support { words: [0; W] };
 
     /// The support of the non-zero values of `v`.
     fn of<const K: usize>(v: &[u16; K]) -> Self {
-        // At least 1 (a model of no words has no bins in its support).
-        let g = Self::group_len::<K>().max(1);
+        const { assert!(W > 0, "a model's support takes at least one word") };
+        let g = Self::group_len::<K>();
         let mut words = [0u32; W];
         for (i, _) in v.iter().enumerate().filter(|&(_, &x)| x != 0) {
             let group = i / g;
@@ -836,7 +838,7 @@ impl<const W: usize> Support<W> {
     /// support, in increasing order.
     #[inline(always)]
     fn for_each<const K: usize>(&self, lo: usize, hi: usize, mut f: impl FnMut(usize)) {
-        let g = Self::group_len::<K>().max(1);
+        let g = Self::group_len::<K>();
         // Only the words that hold groups (one for an edge model's 17 bins).
         let used = K.div_ceil(g).div_ceil(32);
         for (i, &word) in self.words.iter().enumerate().take(used) {
