@@ -359,9 +359,10 @@ impl SceneMotion {
             // costs a third less than with diagonals (about 35,000
             // instructions a QVGA frame on the Cortex-M4F), with the same
             // reports on the real sequences.
-            // The frame has the size of the one the samples were read on
-            // (the tracker refuses another), so the points that lay in it
-            // are those that lie in this one.
+            //
+            // Which stored points lay in the frame follows from the box: the
+            // frame has the size of the one they were read on (the tracker
+            // refuses another).
             let size = (frame.width(), frame.height());
             let last = (self.last.0 as i32, self.last.1 as i32);
             let outer = Lattice::of(&at, true)
