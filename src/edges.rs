@@ -283,11 +283,13 @@ impl<const E: usize> EdgeMap<E> {
                 let row_of = |i: usize| ring.get(i).map_or(&[][..], |r| &r[..]);
                 let window = (row_of((y + 2) % 3), row_of(y % 3), row_of((y + 1) % 3));
                 let sobel_cfg = SobelCells { w, border, bins, t2, weak, nibbles };
-                // Compiled per spacing: the window's columns are then fixed.
-                match dx {
-                    1 => ring_cells::<1>(out, window, xa, x_first, (c0, c1), &sobel_cfg),
-                    2 => ring_cells::<2>(out, window, xa, x_first, (c0, c1), &sobel_cfg),
-                    _ => sparse_cells(out, window, (x_first, dx), (c0, c1), &sobel_cfg),
+                // Compiled per spacing (the window's columns are then
+                // fixed), except in the lean builds.
+                match (sparse, crate::LEAN, dx) {
+                    (true, ..) => sparse_cells(out, window, (x_first, dx), (c0, c1), &sobel_cfg),
+                    (_, true, _) => ring_cells::<0>(out, (window, dx), xa, x_first, (c0, c1), &sobel_cfg),
+                    (_, _, 1) => ring_cells::<1>(out, (window, dx), xa, x_first, (c0, c1), &sobel_cfg),
+                    _ => ring_cells::<2>(out, (window, dx), xa, x_first, (c0, c1), &sobel_cfg),
                 }
             }
             c0 = c1;
@@ -469,6 +471,9 @@ impl Classify {
     }
 }
 
+/// The ring's three luma rows, top to bottom.
+type Ring<'a> = (&'a [u8], &'a [u8], &'a [u8]);
+
 /// What [`ring_cells`] needs besides the ring and the cells' spacing: the
 /// frame width `w`, whether the row is on the frame's border, the number of
 /// orientation bins, the squared threshold, the value of weak cells, and
@@ -496,16 +501,19 @@ struct SobelCells {
 /// shared by every pixel format; compiled per cell spacing `XS` (1 or 2
 /// pixels), so that each copy holds only its own loop (measured on the QVGA
 /// audit: 40 k instructions per frame less than with the
-/// spacing at run time).
+/// spacing at run time). `XS` 0 takes the spacing `dx` at run time: one
+/// copy, in the [`LEAN`](crate::LEAN) builds (measured with `audit/run
+/// size`: 344 B of Cortex-M0+ code less).
 #[inline(never)]
 fn ring_cells<const XS: usize>(
     out: &mut [u8],
-    (r0, r1, r2): (&[u8], &[u8], &[u8]),
+    ((r0, r1, r2), dx): (Ring<'_>, usize),
     xa: usize,
     x_first: usize,
     (c0, c1): (usize, usize),
     cfg: &SobelCells,
 ) {
+    let xs = if XS == 0 { dx } else { XS };
     let SobelCells { w, border, bins, t2, weak, nibbles } = *cfg;
     let class = Classify { t2, weak, shift: sector_shift(bins) };
     let classify = |gx: i32, gy: i32| class.of(gx, gy);
@@ -527,7 +535,7 @@ fn ring_cells<const XS: usize>(
     while c < c1 {
         // A run of checkerboard pairs inside the frame (x − 1 >= 0 and
         // x + 3 < w for each) goes to the sliding loop.
-        if XS == 2 && nibbles && !border && x >= 1 && x + 4 <= w {
+        if xs == 2 && nibbles && !border && x >= 1 && x + 4 <= w {
             let run = ((c1 - c) / 2).min((w - x) / 4);
             let bytes = out.get_mut(c >> 1..).and_then(|o| o.get_mut(..run)).unwrap_or_default();
             // Weak cells' value clamped to a nibble once (orientation bins
@@ -544,7 +552,7 @@ fn ring_cells<const XS: usize>(
         let i = x.wrapping_sub(xa + 1);
         // Cells one pixel apart share a window (checkerboard cells that
         // come here go one at a time).
-        let inner = XS == 1 && !border && x >= 1 && both && x + 2 < w;
+        let inner = xs == 1 && !border && x >= 1 && both && x + 2 < w;
         // (An inner pair has x >= 1 and x > xa, so `i` does not wrap.)
         let windows =
             if inner { (window::<4>(r0, i), window::<4>(r1, i), window::<4>(r2, i)) } else { (None, None, None) };
@@ -557,7 +565,7 @@ fn ring_cells<const XS: usize>(
                 let vb = classify(s(t3, m3, b3) - s(t1, m1, b1), d1 + 2 * d2 + d3);
                 (va, vb)
             }
-            _ => (single(x), if both { single(x + XS) } else { NONE }),
+            _ => (single(x), if both { single(x + xs) } else { NONE }),
         };
         if nibbles {
             // A cell past the row's last leaves its nibble 0 (never read
@@ -575,7 +583,7 @@ fn ring_cells<const XS: usize>(
             }
         }
         c += 2;
-        x += 2 * XS;
+        x += 2 * xs;
     }
 }
 

@@ -276,11 +276,12 @@ impl<const K: usize> Histogram<K> {
     }
 }
 
-/// Whether RGB888 pixels get a region walk of their own: everywhere but on
-/// bare metal, where no camera delivers them (cameras give RGB565, YUV422
-/// or GRAY8) and they take the shared loop of the other layouts, with the
-/// same counts (tested). Measured with `audit/run size`: the loop costs
-/// 968 B of Cortex-M4F and 1,384 B of Cortex-M0+ tracker code.
+/// Whether RGB888 pixels get a region walk and a row-bins loop of their
+/// own: everywhere but on bare metal, where no camera delivers them
+/// (cameras give RGB565, YUV422 or GRAY8) and they take the shared loops of
+/// the other layouts, with the same counts and bins (tested). Measured with
+/// `audit/run size`: the region walk costs 968 B of Cortex-M4F and 1,384 B
+/// of Cortex-M0+ tracker code, the row bins 442 B and 436 B.
 const RGB888_LOOP: bool = !cfg!(target_os = "none");
 
 /// Which colour bins [`Histogram::compute_with`] starts from zero.
@@ -360,14 +361,14 @@ fn general_walk<P: PixelRead, const K: usize, const E: usize>(
 }
 
 /// Whether [`general_walk`] takes rows of whole cell bytes ([`pair_row`])
-/// in the camera formats (RGB565, GRAY8): everywhere but on the bare-metal
-/// cores without a floating-point unit. Measured with `audit/run`: on the
+/// in the camera formats (RGB565, GRAY8): everywhere but in the
+/// [`LEAN`](crate::LEAN) builds. Measured with `audit/run`: on the
 /// Cortex-M4F 0.13 M instructions less a QVGA frame (median, seeds 1 and 2)
 /// for 1.6 KB of code; on the Cortex-M0+, whose software floating point
 /// takes most of a frame, 0.08 M of 11.2 M for 1.5 KB, which its 48 KiB of
 /// code cannot spare. Both ways count the same samples with the same
 /// weights (tested).
-const PAIR_ROWS: bool = !cfg!(all(target_arch = "arm", target_os = "none", target_abi = "eabi"));
+const PAIR_ROWS: bool = !crate::LEAN;
 
 /// A row of [`general_walk`] on a 4-bit map at the lattice's resolution,
 /// whose consecutive samples read consecutive cells: through
@@ -695,9 +696,9 @@ pub(crate) fn row_bins<F: FnMut(usize, usize)>(
     }
     match frame.format() {
         PixelFormat::Rgb565 => packed_bins::<Rgb565, F>(row, (x0, step, n), visit),
-        PixelFormat::Rgb888 => packed_bins::<Rgb888, F>(row, (x0, step, n), visit),
+        PixelFormat::Rgb888 if RGB888_LOOP => packed_bins::<Rgb888, F>(row, (x0, step, n), visit),
         PixelFormat::Gray8 => packed_bins::<Gray8, F>(row, (x0, step, n), visit),
-        PixelFormat::Yuv422 | PixelFormat::I420 | PixelFormat::Nv12 => {
+        PixelFormat::Rgb888 | PixelFormat::Yuv422 | PixelFormat::I420 | PixelFormat::Nv12 => {
             general_bins(frame, layout, y, (x0, step, n), visit)
         }
     }
@@ -1305,6 +1306,41 @@ mod tests {
     fn noise_frames<'a>(rgb: &'a [u8], grey: &'a [u8]) -> [Frame<'a>; 2] {
         let (w, h) = NOISE;
         [Frame::packed(rgb, w, h, PixelFormat::Rgb565).unwrap(), Frame::packed(grey, w, h, PixelFormat::Gray8).unwrap()]
+    }
+
+    #[test]
+    fn the_per_format_row_bins_equal_the_general_ones() {
+        // Reason: a cross-check of two implementations of a row's bins
+        // under the default layout: each format's own loop over packed
+        // pixels and the general accessor's (what RGB888 takes on bare
+        // metal), on random RGB565, RGB888 and GRAY8 frames, for runs from
+        // several columns and steps, including runs past the row's end.
+        let (rgb, grey, _) = noise_scenes(21);
+        let (w, h) = NOISE;
+        let rgb888 = crate::testing::noise_bytes(22, w * h * 3);
+        let frames = [
+            Frame::packed(&rgb, w, h, PixelFormat::Rgb565).unwrap(),
+            Frame::packed(&rgb888, w, h, PixelFormat::Rgb888).unwrap(),
+            Frame::packed(&grey, w, h, PixelFormat::Gray8).unwrap(),
+        ];
+        let layout = Layout::whole(Binning::Rgb8x8x8);
+        for f in &frames {
+            for y in [0, 7, h - 1] {
+                let row = f.row(y).unwrap();
+                for (x0, step, n) in [(0, 1, w), (3, 2, 40), (1, 3, 50), (w - 5, 1, 20)] {
+                    let (mut own, mut any) = (Vec::new(), Vec::new());
+                    let at = (x0, step, n);
+                    match f.format() {
+                        PixelFormat::Rgb565 => packed_bins::<Rgb565, _>(row, at, |i, b| own.push((i, b))),
+                        PixelFormat::Rgb888 => packed_bins::<Rgb888, _>(row, at, |i, b| own.push((i, b))),
+                        _ => packed_bins::<Gray8, _>(row, at, |i, b| own.push((i, b))),
+                    }
+                    general_bins(f, &layout, y, at, |i, b| any.push((i, b)));
+                    assert_eq!(own, any, "{:?} row {y} from {x0} by {step}", f.format());
+                    assert_eq!(own.len(), n.min((w - x0).div_ceil(step)));
+                }
+            }
+        }
     }
 
     #[test]

@@ -88,6 +88,14 @@ pub mod template;
 mod testing;
 pub mod tracker;
 
+/// Whether this build is for a bare-metal core without a floating-point
+/// unit (`thumbv6m-none-eabi`, the Cortex-M0+): there software floating
+/// point takes most of a frame, so a loop specialised for speed saves a
+/// small share of it, while the 48 KiB of tracker code has little room.
+/// Where a specialised loop and a general one count the same (tested), such
+/// builds take the general one; each use says what it measured.
+pub(crate) const LEAN: bool = cfg!(all(target_arch = "arm", target_os = "none", target_abi = "eabi"));
+
 pub use colour::Binning;
 pub use config::{
     BackgroundWeight, BoundaryCue, Config, CorrelationCue, EDGE_SUPPORT_WORDS, EdgeCue, Life, MAX_EDGE_BINS,
