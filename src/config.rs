@@ -104,11 +104,13 @@ pub struct Config {
     pub redetect: bool,
     /// A frame on which the estimate moves with its surroundings counts as
     /// a miss, for a target that moved against them over its first frames
-    /// (the `motion` module, built with the `scene-motion` feature): a box
-    /// left on the background by a panning camera is reported lost. Off by
-    /// default: it costs about 0.15 M instructions a QVGA frame on a
-    /// Cortex-M4F and, on the real sequences' tune split, reports no more of
-    /// the missing frames (docs/accuracy.md).
+    /// (the `motion` module, built with the `scene-motion` feature, a
+    /// default one): a box left on the background by a panning camera is
+    /// reported lost. On in [`Config::default`] where built: on the real
+    /// sequences it reports about twice the missing frames at the same
+    /// accuracy (docs/accuracy.md), for about 0.1 M instructions a QVGA
+    /// frame on a Cortex-M4F. Asking for it without the feature is a
+    /// configuration error.
     pub scene_motion: bool,
     /// Size and shape searched each frame against the surroundings, or
     /// `None` to leave size to the particles' random walk.
@@ -464,7 +466,7 @@ impl Default for Config {
             min_half_axis: 2.0,
             life: Life::Confidence { lost_below: 0.6, found_above: 0.8 },
             redetect: false,
-            scene_motion: false,
+            scene_motion: cfg!(feature = "scene-motion"),
             size: Some(SizeSearch { step: 0.02, similarity: 1.0, aspect: true, aspect_pull: 0.03, scale_pull: 0.05 }),
             shift: Some(ShiftSearch { step: 0.05, rounds: 1, similarity: 3.0, template: 0.15 }),
             surroundings_rate: 0.05,

@@ -20,7 +20,7 @@ fn config(pick: u8) -> Config {
         4 => Config { likelihood: pftrack::Likelihood { shape: Shape::Exponential, ..d.likelihood }, ..d },
         5 => Config { model_update: ModelUpdate::WhenDegraded { factor: 0.9, frames: 2 }, ..d },
         6 => Config { boundary: Some(BoundaryCue { weight: 0.3 }), ..d },
-        7 => Config { scene_motion: true, ..d },
+        7 => Config { scene_motion: !d.scene_motion, ..d },
         _ => Config { table: Some(TableMode { spacing: 1 }), ..d },
     }
 }

@@ -328,7 +328,7 @@ mod tests {
                 "shift" => "0.1:2:1:0.5",
                 "life" => "appearance",
                 "redetect" => "on",
-                "scene_motion" => "on",
+                "scene_motion" => "off",
                 "correlation" => "off",
                 "background_weight" => "1",
                 "template" => "0.3:0.05",
