@@ -20,7 +20,9 @@
 //! A static target filmed from a moving camera (a building from a drone)
 //! also moves with its surroundings, so the test applies only to a target
 //! that moved against them over its first [`EARLY`] tracked frames, when
-//! the box is still on it. Measured offline on the real sequences
+//! the box is still on it: by its net displacement against them, the sum
+//! of its motions as vectors, so that a box jittering about a static
+//! target, whose motions cancel, does not count as moving. Measured offline on the real sequences
 //! (`tools/local-motion`, full-resolution matching), this flags most of the
 //! frames of the two sequences where the box is left on the background and
 //! about 5% of frames on the target.
@@ -40,8 +42,8 @@ const RING_POINTS: usize = GRID * GRID - (GRID / 2) * (GRID / 2);
 /// surroundings.
 pub(crate) const EARLY: u16 = 20;
 /// A box moving less than this against its ring, in pixels a frame (running
-/// mean), moves with it; a target that moved at least this much over its
-/// first frames is one that moves.
+/// mean), moves with it; a target whose net displacement against its ring
+/// over its first frames is at least this much a frame is one that moves.
 pub(crate) const STILL: Real = 0.5;
 /// A ring moving at least this much, in pixels a frame (running mean),
 /// tells a moving camera (or scene); with a still one there is nothing to
@@ -59,9 +61,12 @@ pub(crate) struct SceneMotion {
     inner: [u8; BOX_POINTS],
     /// Luma of the ring's lattice points (the same).
     outer: [u8; RING_POINTS],
-    /// The box they were read on, if any was (a box with no lattice is
-    /// not).
-    at: Option<Ellipse>,
+    /// The box they were read on, if `read` (a box with no lattice is not
+    /// read): a flag beside `frames`, which packs into `frames`' word, not
+    /// an `Option`, whose tag would take a word of its own (4 bytes in
+    /// every tracker).
+    at: Ellipse,
+    read: bool,
     /// Running means: the box's motion against the ring's, and the ring's,
     /// in pixels a frame.
     against: Real,
@@ -70,8 +75,9 @@ pub(crate) struct SceneMotion {
     /// smoothly); 16 bits, as frames are (`MAX_DIMENSION`).
     last: (i16, i16),
     /// Sum of the box's motion against the ring over the first tracked
-    /// frames, and how many tracked frames were measured.
-    early: Real,
+    /// frames, as a vector in pixels, and how many tracked frames were
+    /// measured.
+    early: (Real, Real),
     frames: u16,
 }
 
@@ -326,11 +332,12 @@ impl SceneMotion {
         SceneMotion {
             inner: [0; BOX_POINTS],
             outer: [0; RING_POINTS],
-            at: None,
+            at: Ellipse { cx: 0.0, cy: 0.0, hx: 0.0, hy: 0.0 },
+            read: false,
             against: 0.0,
             ring: 0.0,
             last: (0, 0),
-            early: 0.0,
+            early: (0.0, 0.0),
             frames: 0,
         }
     }
@@ -343,12 +350,12 @@ impl SceneMotion {
 
     fn read_at(&mut self, frame: &Frame<'_>, e: &Ellipse) {
         let (Some(inner), Some(outer)) = (Lattice::of(e, false), Lattice::of(e, true)) else {
-            self.at = None;
+            self.read = false;
             return;
         };
         sample(frame, &inner, &mut self.inner);
         sample(frame, &outer, &mut self.outer);
-        self.at = Some(*e);
+        (self.at, self.read) = (*e, true);
     }
 
     /// Measures how the last frame's box and ring moved into `frame`, folds
@@ -357,7 +364,8 @@ impl SceneMotion {
     /// next frame. Returns whether the estimate now moves with its
     /// surroundings (see [`SceneMotion::moves_with_surroundings`]).
     pub(crate) fn update(&mut self, frame: &Frame<'_>, e: &Ellipse, tracked: bool) -> bool {
-        if let Some(at) = self.at {
+        if self.read {
+            let at = self.at;
             // The ring's shift from its last one; the box's by unit steps from
             // the ring's, at most three, along the axes only (a diagonal
             // takes two): a box moving further against its ring is not
@@ -391,7 +399,7 @@ impl SceneMotion {
                 }
                 if tracked {
                     if self.frames < EARLY {
-                        self.early += against;
+                        self.early = (self.early.0 + (bx - rx), self.early.1 + (by - ry));
                     }
                     self.frames = self.frames.saturating_add(1);
                 }
@@ -402,11 +410,14 @@ impl SceneMotion {
     }
 
     /// Whether a target that moved against its surroundings over its first
-    /// [`EARLY`] tracked frames is now estimated by a box that moves with a
-    /// moving ring (running means: less than [`STILL`] against a ring moving
-    /// at least [`MOVING`] pixels a frame).
+    /// [`EARLY`] tracked frames (a net displacement of at least [`STILL`]
+    /// pixels a frame) is now estimated by a box that moves with a moving
+    /// ring (running means: less than [`STILL`] against a ring moving at
+    /// least [`MOVING`] pixels a frame).
     fn moves_with_surroundings(&self) -> bool {
-        self.frames >= EARLY && self.early >= STILL * EARLY as Real && self.against < STILL && self.ring >= MOVING
+        let (ex, ey) = self.early;
+        let moved = sqrt(ex * ex + ey * ey) >= STILL * EARLY as Real;
+        self.frames >= EARLY && moved && self.against < STILL && self.ring >= MOVING
     }
 }
 
@@ -571,20 +582,18 @@ mod tests {
         assert!(fy.abs() < 0.25, "{fy}");
     }
 
-    /// Drives a tracker's view: `moving` frames of a target walking 2 px a
-    /// frame right over a still scene (the box on it), or standing still if
-    /// `walks` is false; then `panning` frames of the scene panning 2 px a
-    /// frame right with the box left on the scene. Returns whether each
-    /// panning frame was flagged.
-    fn run(walks: bool, panning: i32) -> Vec<bool> {
+    /// Drives a tracker's view: `EARLY` frames of a target over a still
+    /// scene (the box on it) that moves `step(k)` px right on its `k`-th
+    /// frame; then `panning` frames of the scene panning 2 px a frame right
+    /// with the box left on the scene. Returns whether each panning frame
+    /// was flagged.
+    fn run(step: impl Fn(u16) -> i32, panning: i32) -> Vec<bool> {
         let mut m = SceneMotion::new();
-        let mut at = (20, 48);
+        let mut at = (40, 48);
         let first = scene((0.0, 0.0), Some(at));
         m.start(&frame(&first), &boxed(at));
-        for _ in 0..EARLY {
-            if walks {
-                at.0 += 2;
-            }
+        for k in 0..EARLY {
+            at.0 += step(k);
             let px = scene((0.0, 0.0), Some(at));
             assert!(!m.update(&frame(&px), &boxed(at), true), "flagged while on the target");
         }
@@ -614,7 +623,7 @@ mod tests {
         // (0.44); the ring's is 2 * (1 - 0.8^k), below 1 up to k = 3.
         // Hence not flagged on the first three panning frames, flagged
         // from the ninth on.
-        let flags = run(true, 12);
+        let flags = run(|_| 2, 12);
         assert!(flags.iter().take(3).all(|&f| !f), "{flags:?}");
         assert!(flags.iter().skip(8).all(|&f| f), "{flags:?}");
     }
@@ -624,7 +633,19 @@ mod tests {
         // Reason: the gate. A target that stood still over its first frames
         // (0 against its ring, below STILL) may be a building filmed from a
         // drone: moving with the scene is what it does.
-        assert!(run(false, 12).iter().all(|&f| !f));
+        assert!(run(|_| 0, 12).iter().all(|&f| !f));
+    }
+
+    #[test]
+    fn a_target_that_moves_back_and_forth_is_not_one_that_moves() {
+        // Reason: by construction and by hand. The target moves 2 px a
+        // frame against its still ring, right then left: each frame's
+        // motion is 2 px, above STILL, but they cancel, and its net
+        // displacement over the first 20 frames is 0, below 20 · STILL =
+        // 10 px. So, like a still one, it is never flagged (errors of the
+        // shift that point every way, as on a target with little texture,
+        // cancel the same way).
+        assert!(run(|k| if k % 2 == 0 { 2 } else { -2 }, 12).iter().all(|&f| !f));
     }
 
     #[test]
