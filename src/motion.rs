@@ -56,19 +56,18 @@ const RATE: Real = 0.2;
 
 /// The last frame's samples around the estimate and the running means of
 /// the motion measured from them.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub(crate) struct SceneMotion {
     /// Luma of the box's lattice points (0 for those outside the frame:
     /// which they are follows from the box, [`Lattice::rows_in`]).
     inner: [u8; BOX_POINTS],
     /// Luma of the ring's lattice points (the same).
     outer: [u8; RING_POINTS],
-    /// The box they were read on, if `read` (a box with no lattice is not
-    /// read): a flag beside `frames`, which packs into `frames`' word, not
-    /// an `Option`, whose tag would take a word of its own (4 bytes in
-    /// every tracker).
+    /// The last box given: the samples were read on it if it has lattices
+    /// (a box without, such as the NaN box of a new state, is not read).
+    /// Not an `Option`, whose tag would take a word of its own (4 bytes in
+    /// every tracker): whether it was read follows from the box.
     at: Ellipse,
-    read: bool,
     /// Running means: the box's motion against the ring's, and the ring's,
     /// in pixels a frame.
     against: Real,
@@ -334,8 +333,7 @@ impl SceneMotion {
         SceneMotion {
             inner: [0; BOX_POINTS],
             outer: [0; RING_POINTS],
-            at: Ellipse { cx: 0.0, cy: 0.0, hx: 0.0, hy: 0.0 },
-            read: false,
+            at: Ellipse { cx: Real::NAN, cy: Real::NAN, hx: Real::NAN, hy: Real::NAN },
             against: 0.0,
             ring: 0.0,
             last: (0, 0),
@@ -351,13 +349,11 @@ impl SceneMotion {
     }
 
     fn read_at(&mut self, frame: &Frame<'_>, e: &Ellipse) {
-        let (Some(inner), Some(outer)) = (Lattice::of(e, false), Lattice::of(e, true)) else {
-            self.read = false;
-            return;
-        };
-        sample(frame, &inner, &mut self.inner);
-        sample(frame, &outer, &mut self.outer);
-        (self.at, self.read) = (*e, true);
+        self.at = *e;
+        if let (Some(inner), Some(outer)) = (Lattice::of(e, false), Lattice::of(e, true)) {
+            sample(frame, &inner, &mut self.inner);
+            sample(frame, &outer, &mut self.outer);
+        }
     }
 
     /// Measures how the last frame's box and ring moved into `frame`, folds
@@ -366,8 +362,8 @@ impl SceneMotion {
     /// next frame. Returns whether the estimate now moves with its
     /// surroundings (see [`SceneMotion::moves_with_surroundings`]).
     pub(crate) fn update(&mut self, frame: &Frame<'_>, e: &Ellipse, tracked: bool) -> bool {
-        if self.read {
-            let at = self.at;
+        // The last box's lattices, if it had them (and so was read).
+        if let (Some(ring_lattice), Some(box_lattice)) = (Lattice::of(&self.at, true), Lattice::of(&self.at, false)) {
             // The ring's shift from its last one; the box's by unit steps from
             // the ring's, at most three, along the axes only (a diagonal
             // takes two): a box moving further against its ring is not
@@ -382,12 +378,10 @@ impl SceneMotion {
             // refuses another).
             let size = (frame.width(), frame.height());
             let last = (self.last.0 as i32, self.last.1 as i32);
-            let outer = Lattice::of(&at, true)
-                .and_then(|l| best_shift(frame, &l, (&self.outer, &l.rows_in(size)), last, &[2, 1], true));
-            let inner = outer.and_then(|(r, _)| {
-                let l = Lattice::of(&at, false)?;
-                best_shift(frame, &l, (&self.inner, &l.rows_in(size)), r, &[1, 1, 1], false)
-            });
+            let (l, m) = (&ring_lattice, &box_lattice);
+            let outer = best_shift(frame, l, (&self.outer, &l.rows_in(size)), last, &[2, 1], true);
+            let inner =
+                outer.and_then(|(r, _)| best_shift(frame, m, (&self.inner, &m.rows_in(size)), r, &[1, 1, 1], false));
             let clamp = |v: i32| v.clamp(i16::MIN as i32, i16::MAX as i32) as i16;
             self.last = outer.map_or((0, 0), |((x, y), _)| (clamp(x), clamp(y)));
             if let (Some((_, (bx, by))), Some((_, (rx, ry)))) = (inner, outer) {
