@@ -11,8 +11,9 @@
 //! colour similarity (see [`crate::config::BoundaryCue`]).
 
 use crate::edges::sobel;
-use crate::frame::{Frame, luma};
+use crate::frame::Frame;
 use crate::geometry::Ellipse;
+use crate::pixel::luma;
 use crate::region::floor;
 use crate::scalar::{Real, sqrt};
 
@@ -48,7 +49,7 @@ pub fn outline_gradient(frame: &Frame<'_>, e: &Ellipse) -> Real {
         return 0.0;
     }
     let (w, h) = (frame.width() as i32, frame.height() as i32);
-    let limit = (2 * crate::frame::MAX_DIMENSION) as Real;
+    let limit = (2 * crate::pixel::MAX_DIMENSION) as Real;
     let (mut sum, mut n) = (0.0 as Real, 0u32);
     for &(c, s) in UNIT.iter() {
         let (px, py) = (e.cx + e.hx * c, e.cy + e.hy * s);

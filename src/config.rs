@@ -615,7 +615,7 @@ impl Config {
             return Err(ConfigError { field: "lost_after", problem: ParamProblem::OutOfRange });
         }
         check("reseed_fraction", self.reseed_fraction, 0.0, 1.0)?;
-        check("min_half_axis", self.min_half_axis, 1.0, (crate::frame::MAX_DIMENSION / 2) as Real)?;
+        check("min_half_axis", self.min_half_axis, 1.0, (crate::pixel::MAX_DIMENSION / 2) as Real)?;
         if let Some(t) = self.template {
             check("template.weight", t.weight, 0.0, 1.0)?;
             check("template.rate", t.rate, 0.0, 1.0)?;

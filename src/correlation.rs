@@ -32,8 +32,9 @@
 //! tune split, about 0.01 lower on check; docs/accuracy.md). Built with the `correlation` feature only: every
 //! tracker built with it carries these bytes, used or not.
 
-use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565};
+use crate::frame::Frame;
 use crate::geometry::Ellipse;
+use crate::pixel::{self, Loop, Loops, PixelRead, RowReader};
 use crate::scalar::{Real, sqrt};
 use microfft::Complex32;
 
@@ -432,19 +433,8 @@ fn transform(work: &mut Spectrum, frame: &Frame<'_>, e: &Ellipse, padding: Real)
         let y = crate::scalar::clamp(y0 + (r as Real + 0.5) * h / GRID as Real, 0.0, ymax) as usize;
         let mut luma = [0u8; GRID];
         if let Some(pixels) = frame.row(y) {
-            // One format dispatch per row: the camera formats read
-            // through their own compiled loop.
-            match frame.format() {
-                PixelFormat::Rgb565 => read_row::<Rgb565>(&mut luma, pixels, &columns),
-                PixelFormat::Gray8 | PixelFormat::I420 | PixelFormat::Nv12 => {
-                    read_row::<Gray8>(&mut luma, pixels, &columns)
-                }
-                _ => {
-                    for (l, &x) in luma.iter_mut().zip(columns.iter()) {
-                        *l = frame.luma_in(pixels, x).unwrap_or(0);
-                    }
-                }
-            }
+            // One format dispatch per row, not per pixel.
+            pixel::read(frame.format(), WindowRow { frame, row: pixels, columns: &columns, luma: &mut luma });
         }
         for (slot, pair) in row.iter_mut().zip(luma.chunks_exact(2)) {
             if let [a, b] = pair {
@@ -522,10 +512,38 @@ fn log_luma(l: u8) -> Real {
 /// The luma of `row`'s pixels at `columns`, in a format whose pixels are
 /// self-contained (the others have no [`PixelRead::pixels`], and read
 /// pixel by pixel).
-fn read_row<P: PixelRead>(luma: &mut [u8; GRID], row: &[u8], columns: &[usize; GRID]) {
-    let Some(px) = P::pixels(row) else { return };
-    for (l, &x) in luma.iter_mut().zip(columns.iter()) {
-        *l = px.get(x).map_or(0, |&p| P::px_luma(p));
+/// One row of the window: the lumas of `row` (a row of `frame`) at
+/// `columns`, 0 past the row.
+struct WindowRow<'f, 'r> {
+    frame: &'r Frame<'f>,
+    row: &'f [u8],
+    columns: &'r [usize; GRID],
+    luma: &'r mut [u8; GRID],
+}
+
+impl RowReader for WindowRow<'_, '_> {
+    type Output = ();
+    // The camera formats; the others read a pixel at a time.
+    const LOOPS: Loops = Loops {
+        rgb565: Loop::Always,
+        rgb888: Loop::General,
+        yuv422: Loop::General,
+        gray8: Loop::Always,
+        planar_luma: Loop::Always,
+    };
+
+    fn rows_of<P: PixelRead>(self) {
+        let Some(px) = P::pixels(self.row) else { return };
+        for (l, &x) in self.luma.iter_mut().zip(self.columns.iter()) {
+            *l = px.get(x).map_or(0, |&p| P::px_luma(p));
+        }
+    }
+
+    #[inline(always)]
+    fn general(self) {
+        for (l, &x) in self.luma.iter_mut().zip(self.columns.iter()) {
+            *l = self.frame.luma_in(self.row, x).unwrap_or(0);
+        }
     }
 }
 
@@ -539,7 +557,7 @@ fn sub_cell(left: Real, peak: Real, right: Real) -> Real {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frame::PixelFormat;
+    use crate::pixel::PixelFormat;
 
     const W: usize = 160;
     const H: usize = 120;

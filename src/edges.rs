@@ -12,8 +12,9 @@
 //! it: bounded memory and cost, but a coarser edge cue.
 
 use crate::config::MIN_EDGE_THRESHOLD;
-use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
+use crate::frame::Frame;
 use crate::geometry::Ellipse;
+use crate::pixel::{self, Loop, Loops, PixelRead, RowReader};
 use crate::region::{Lattice, RowSpan, Sampling, div_small, floor};
 use crate::scalar::{Real, isqrt, sqrt};
 
@@ -285,9 +286,9 @@ impl<const E: usize> EdgeMap<E> {
                 let sobel_cfg = SobelCells { w, border, bins, t2, weak, nibbles };
                 // Compiled per spacing (the window's columns are then
                 // fixed), except in the lean builds.
-                match (sparse, crate::LEAN, dx) {
+                match (sparse, Loop::Fast.compiled(), dx) {
                     (true, ..) => sparse_cells(out, window, (x_first, dx), (c0, c1), &sobel_cfg),
-                    (_, true, _) => ring_cells::<0>(out, (window, dx), xa, x_first, (c0, c1), &sobel_cfg),
+                    (_, false, _) => ring_cells::<0>(out, (window, dx), xa, x_first, (c0, c1), &sobel_cfg),
                     (_, _, 1) => ring_cells::<1>(out, (window, dx), xa, x_first, (c0, c1), &sobel_cfg),
                     _ => ring_cells::<2>(out, (window, dx), xa, x_first, (c0, c1), &sobel_cfg),
                 }
@@ -346,12 +347,52 @@ impl<const E: usize> EdgeMap<E> {
 /// The lumas of pixels `xa..xb` of `row` (a row of `frame`) into `dst`:
 /// one format dispatch per row, then that format's own loop.
 fn luma_span(frame: &Frame<'_>, row: &[u8], span: (usize, usize), dst: &mut [u8]) {
-    match frame.format() {
-        PixelFormat::Rgb565 => luma_span_of::<Rgb565>(row, span, dst),
-        PixelFormat::Rgb888 => luma_span_of::<Rgb888>(row, span, dst),
-        PixelFormat::Yuv422 => luma_span_of::<Yuv422>(row, span, dst),
-        // A planar frame's rows are its luma plane's.
-        PixelFormat::Gray8 | PixelFormat::I420 | PixelFormat::Nv12 => luma_span_of::<Gray8>(row, span, dst),
+    pixel::read(frame.format(), LumaRow { frame, row, at: span, dst, windows: false })
+}
+
+/// The lumas of one ring row: [`luma_span`]'s (`windows` false, `at` the
+/// span) or [`luma_windows`]' (`at` the first column and the spacing).
+struct LumaRow<'f, 'r> {
+    frame: &'r Frame<'f>,
+    row: &'f [u8],
+    at: (usize, usize),
+    dst: &'r mut [u8],
+    windows: bool,
+}
+
+impl RowReader for LumaRow<'_, '_> {
+    type Output = ();
+    // Every format: the edge map reads every pixel it covers.
+    const LOOPS: Loops = Loops {
+        rgb565: Loop::Always,
+        rgb888: Loop::Always,
+        yuv422: Loop::Always,
+        gray8: Loop::Always,
+        planar_luma: Loop::Always,
+    };
+
+    #[inline(always)]
+    fn rows_of<P: PixelRead>(self) {
+        if self.windows {
+            luma_windows_of::<P>(self.row, self.at, self.dst)
+        } else {
+            luma_span_of::<P>(self.row, self.at, self.dst)
+        }
+    }
+
+    fn general(self) {
+        let l = |x: usize| self.frame.luma_in(self.row, x).unwrap_or(0);
+        let (x0, d) = self.at;
+        if self.windows {
+            for (i, cell) in self.dst.as_chunks_mut::<3>().0.iter_mut().enumerate() {
+                let x = x0 + i * d;
+                *cell = [x.checked_sub(1).map_or(0, l), l(x), l(x + 1)];
+            }
+        } else {
+            for (i, v) in self.dst.iter_mut().enumerate().take(d.saturating_sub(x0)) {
+                *v = l(x0 + i);
+            }
+        }
     }
 }
 
@@ -382,12 +423,7 @@ fn luma_span_of<P: PixelRead>(row: &[u8], (xa, xb): (usize, usize), dst: &mut [u
 /// column is outside the row): one format dispatch per row, then that
 /// format's own loop.
 fn luma_windows(frame: &Frame<'_>, row: &[u8], at: (usize, usize), dst: &mut [u8]) {
-    match frame.format() {
-        PixelFormat::Rgb565 => luma_windows_of::<Rgb565>(row, at, dst),
-        PixelFormat::Rgb888 => luma_windows_of::<Rgb888>(row, at, dst),
-        PixelFormat::Yuv422 => luma_windows_of::<Yuv422>(row, at, dst),
-        PixelFormat::Gray8 | PixelFormat::I420 | PixelFormat::Nv12 => luma_windows_of::<Gray8>(row, at, dst),
-    }
+    pixel::read(frame.format(), LumaRow { frame, row, at, dst, windows: true })
 }
 
 /// [`luma_windows`] in format `P`.
@@ -769,6 +805,7 @@ pub fn sobel(p: [i32; 9]) -> (i32, i32) {
 mod tests {
     use super::*;
     use crate::histogram::{Clear, Histogram};
+    use crate::pixel::PixelFormat;
     use crate::region::for_each_in_ellipse;
 
     #[test]

@@ -9,7 +9,7 @@ use core::fmt;
 pub enum FrameError {
     /// Width or height is zero.
     ZeroSize,
-    /// Width or height exceeds [`crate::frame::MAX_DIMENSION`].
+    /// Width or height exceeds [`crate::pixel::MAX_DIMENSION`].
     TooLarge {
         /// The requested width.
         width: usize,
@@ -164,7 +164,7 @@ impl fmt::Display for FrameError {
         match *self {
             FrameError::ZeroSize => write!(f, "frame width or height is zero"),
             FrameError::TooLarge { width, height } => {
-                write!(f, "frame {width}x{height} exceeds the maximum of {0}x{0}", crate::frame::MAX_DIMENSION)
+                write!(f, "frame {width}x{height} exceeds the maximum of {0}x{0}", crate::pixel::MAX_DIMENSION)
             }
             FrameError::StrideTooSmall { stride, row_bytes } => {
                 write!(f, "stride {stride} is shorter than a row of {row_bytes} bytes")

@@ -13,8 +13,9 @@
 use crate::colour::{Binning, levels_bin};
 use crate::config::MAX_EDGE_BINS;
 use crate::edges::{EdgeMap, NIBBLE_NONE, RowCells};
-use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565, Rgb888, Yuv422};
+use crate::frame::Frame;
 use crate::geometry::Ellipse;
+use crate::pixel::{self, Loop, Loops, PixelRead, RowReader};
 use crate::region::{
     Kernel, Lattice, PairKernel, Raster, RowSpan, Sampling, floor, for_each_row, quadrant, shrink, widen,
 };
@@ -196,44 +197,16 @@ impl<const K: usize> Histogram<K> {
             None => (None, &mut unused),
         };
         edge.clear();
-        // The default layout gets a loop compiled per pixel format; the
-        // others (HSV, coarser or adaptive RGB, quadrants), slower per pixel
-        // anyway, share one loop that reads pixels through the general
-        // accessor. A loop per layout and format would cost more flash than
-        // a small target can spare (measured: +6 KB on Cortex-M4 per loop).
-        // The planar formats, whose pixels span planes, take the general
-        // accessor too, as does RGB888 on bare metal (see `RGB888_LOOP`).
-        match (per_format && layout.is_fast(), frame.format()) {
-            (true, PixelFormat::Rgb565) => self.accumulate::<Rgb565, E>(frame, e, lattice, map, edge),
-            (true, PixelFormat::Rgb888) if RGB888_LOOP => self.accumulate::<Rgb888, E>(frame, e, lattice, map, edge),
-            (true, PixelFormat::Yuv422) => self.accumulate::<Yuv422, E>(frame, e, lattice, map, edge),
-            (true, PixelFormat::Gray8) => self.accumulate::<Gray8, E>(frame, e, lattice, map, edge),
-            _ => {
-                let (counts, mut total) = (&mut self.counts, 0u32);
-                let quads = cfg!(feature = "quadrants") && layout.segments == 4;
-                let seg = K / layout.segments.max(1) as usize;
-                let centre = (floor(e.cx), floor(e.cy));
-                let (binning, levels) = (layout.binning, layout.levels);
-                for_each_row(frame, e, lattice, |span| {
-                    let y = span.y;
-                    let cells = row_cells(map, &span);
-                    for (i, (x, w)) in span.enumerate() {
-                        edge.add_to_bin(cells.get(i) as usize, w);
-                        let q = if quads { quadrant(x, y, centre) } else { 0 };
-                        if let Some(rgb) = frame.rgb(x, y) {
-                            let b = match binning {
-                                Binning::Adaptive => levels_bin(rgb, levels.get(q).copied().unwrap_or(2)),
-                                other => other.bin(rgb),
-                            };
-                            if let Some(c) = counts.get_mut(q * seg + b) {
-                                *c = c.wrapping_add(w);
-                                total = total.wrapping_add(w);
-                            }
-                        }
-                    }
-                });
-                self.total = total;
-            }
+        // The default layout gets a loop compiled per pixel format (see
+        // `RegionWalk::LOOPS`); the others (HSV, coarser or adaptive RGB,
+        // quadrants), slower per pixel anyway, share one loop that reads
+        // pixels through the general accessor: a loop per layout and format
+        // would cost more flash than a small target can spare.
+        let walk = RegionWalk { hist: self, frame, e, layout, lattice, map, edge };
+        if per_format && layout.is_fast() {
+            pixel::read(frame.format(), walk)
+        } else {
+            walk.general()
         }
         // 4-bit maps drop the weight of cells with no bin into the nibble
         // form's "none" bin, which no orientation uses (see `take`).
@@ -276,13 +249,64 @@ impl<const K: usize> Histogram<K> {
     }
 }
 
-/// Whether RGB888 pixels get a region walk and a row-bins loop of their
-/// own: everywhere but on bare metal, where no camera delivers them
-/// (cameras give RGB565, YUV422 or GRAY8) and they take the shared loops of
-/// the other layouts, with the same counts and bins (tested). Measured with
-/// `audit/run size`: the region walk costs 968 B of Cortex-M4F and 1,384 B
-/// of Cortex-M0+ tracker code, the row bins 442 B and 436 B.
-const RGB888_LOOP: bool = !cfg!(target_os = "none");
+/// One region's colour and edge walk: [`Histogram::compute_with`]'s
+/// arguments, read by a loop per format or the general one.
+struct RegionWalk<'h, 'f, 'r, const K: usize, const E: usize> {
+    hist: &'h mut Histogram<K>,
+    frame: &'r Frame<'f>,
+    e: &'r Ellipse,
+    layout: &'r Layout,
+    lattice: Lattice,
+    map: Option<&'r EdgeMap<E>>,
+    edge: &'r mut EdgeHistogram,
+}
+
+impl<const K: usize, const E: usize> RowReader for RegionWalk<'_, '_, '_, K, E> {
+    type Output = ();
+    // RGB888 reaches a microcontroller from no camera (they give RGB565,
+    // YUV 4:2:2 or GRAY8); the planar formats' pixels span planes.
+    const LOOPS: Loops = Loops {
+        rgb565: Loop::Always,
+        rgb888: Loop::Host,
+        yuv422: Loop::Always,
+        gray8: Loop::Always,
+        planar_luma: Loop::General,
+    };
+
+    #[inline(always)]
+    fn rows_of<P: PixelRead>(self) {
+        self.hist.accumulate::<P, E>(self.frame, self.e, self.lattice, self.map, self.edge)
+    }
+
+    #[inline(always)]
+    fn general(self) {
+        let RegionWalk { hist, frame, e, layout, lattice, map, edge } = self;
+        let (counts, mut total) = (&mut hist.counts, 0u32);
+        let quads = cfg!(feature = "quadrants") && layout.segments == 4;
+        let seg = K / layout.segments.max(1) as usize;
+        let centre = (floor(e.cx), floor(e.cy));
+        let (binning, levels) = (layout.binning, layout.levels);
+        for_each_row(frame, e, lattice, |span| {
+            let y = span.y;
+            let cells = row_cells(map, &span);
+            for (i, (x, w)) in span.enumerate() {
+                edge.add_to_bin(cells.get(i) as usize, w);
+                let q = if quads { quadrant(x, y, centre) } else { 0 };
+                if let Some(rgb) = frame.rgb(x, y) {
+                    let b = match binning {
+                        Binning::Adaptive => levels_bin(rgb, levels.get(q).copied().unwrap_or(2)),
+                        other => other.bin(rgb),
+                    };
+                    if let Some(c) = counts.get_mut(q * seg + b) {
+                        *c = c.wrapping_add(w);
+                        total = total.wrapping_add(w);
+                    }
+                }
+            }
+        });
+        hist.total = total;
+    }
+}
 
 /// Which colour bins [`Histogram::compute_with`] starts from zero.
 #[derive(Copy, Clone)]
@@ -346,8 +370,11 @@ fn general_walk<P: PixelRead, const K: usize, const E: usize>(
     // With a 4-bit map, every sample on its row adds its weight to one edge
     // value and (with all 512 bins of the fast layout) to one colour bin:
     // the colour mass is the sum over the edge values, and the rows need
-    // not keep it (`edge` starts empty).
-    let by_edges = PAIR_ROWS && P::CHECKER_WALK && K >= 512 && map.is_some_and(|m| m.nibbles());
+    // not keep it (`edge` starts empty). Rows of whole cell bytes are read
+    // two samples at a time in the camera formats (RGB565, GRAY8), a loop
+    // that saves time only; both ways count the same samples with the same
+    // weights (tested).
+    let by_edges = Loop::Fast.compiled() && P::CHECKER_WALK && K >= 512 && map.is_some_and(|m| m.nibbles());
     for_each_row(frame, e, lattice, |span| {
         // The default checkerboard takes `checker_walk`; what comes here
         // (coarser lattices, regions past the map) takes the pair loop on
@@ -359,16 +386,6 @@ fn general_walk<P: PixelRead, const K: usize, const E: usize>(
     });
     if by_edges { edge.iter().take(NIBBLE_NONE as usize + 1).fold(0u32, |a, &c| a.wrapping_add(c)) } else { total }
 }
-
-/// Whether [`general_walk`] takes rows of whole cell bytes ([`pair_row`])
-/// in the camera formats (RGB565, GRAY8): everywhere but in the
-/// [`LEAN`](crate::LEAN) builds. Measured with `audit/run`: on the
-/// Cortex-M4F 0.13 M instructions less a QVGA frame (median, seeds 1 and 2)
-/// for 1.6 KB of code; on the Cortex-M0+, whose software floating point
-/// takes most of a frame, 0.08 M of 11.2 M for 1.5 KB, which its 48 KiB of
-/// code cannot spare. Both ways count the same samples with the same
-/// weights (tested).
-const PAIR_ROWS: bool = !crate::LEAN;
 
 /// A row of [`general_walk`] on a 4-bit map at the lattice's resolution,
 /// whose consecutive samples read consecutive cells: through
@@ -694,13 +711,39 @@ pub(crate) fn row_bins<F: FnMut(usize, usize)>(
     if !layout.is_fast() {
         return general_bins(frame, layout, y, (x0, step, n), visit);
     }
-    match frame.format() {
-        PixelFormat::Rgb565 => packed_bins::<Rgb565, F>(row, (x0, step, n), visit),
-        PixelFormat::Rgb888 if RGB888_LOOP => packed_bins::<Rgb888, F>(row, (x0, step, n), visit),
-        PixelFormat::Gray8 => packed_bins::<Gray8, F>(row, (x0, step, n), visit),
-        PixelFormat::Rgb888 | PixelFormat::Yuv422 | PixelFormat::I420 | PixelFormat::Nv12 => {
-            general_bins(frame, layout, y, (x0, step, n), visit)
-        }
+    pixel::read(frame.format(), RowBins { frame, layout, row, y, at: (x0, step, n), visit })
+}
+
+/// [`row_bins`]' arguments, read by a loop per format or the general one.
+struct RowBins<'f, 'r, F> {
+    frame: &'r Frame<'f>,
+    layout: &'r Layout,
+    row: &'f [u8],
+    y: usize,
+    at: (usize, usize, usize),
+    visit: F,
+}
+
+impl<F: FnMut(usize, usize)> RowReader for RowBins<'_, '_, F> {
+    type Output = ();
+    // The formats whose pixels are self-contained (YUV 4:2:2's pairs share
+    // their chroma), RGB888 as in the region walk.
+    const LOOPS: Loops = Loops {
+        rgb565: Loop::Always,
+        rgb888: Loop::Host,
+        yuv422: Loop::General,
+        gray8: Loop::Always,
+        planar_luma: Loop::General,
+    };
+
+    #[inline(always)]
+    fn rows_of<P: PixelRead>(self) {
+        packed_bins::<P, F>(self.row, self.at, self.visit)
+    }
+
+    #[inline(always)]
+    fn general(self) {
+        general_bins(self.frame, self.layout, self.y, self.at, self.visit)
     }
 }
 
@@ -735,27 +778,61 @@ pub(crate) fn for_each_bin<F: FnMut(usize, usize, usize)>(
     e: &Ellipse,
     binning: Binning,
     lattice: Lattice,
-    mut visit: F,
+    visit: F,
 ) {
     // Chosen once per region, not per pixel: RGB565 camera frames with the
     // default binning read bins straight from the packed bits.
-    let packed = binning == Binning::Rgb8x8x8 && frame.format() == PixelFormat::Rgb565;
-    for_each_row(frame, e, lattice, |span| {
-        let (y, row) = (span.y, span.row);
-        if packed {
+    let walk = BinWalk { frame, e, binning, lattice, visit };
+    if binning == Binning::Rgb8x8x8 { pixel::read(frame.format(), walk) } else { walk.general() }
+}
+
+/// [`for_each_bin`]'s arguments, read by a loop per format or the general one.
+struct BinWalk<'f, 'r, F> {
+    frame: &'r Frame<'f>,
+    e: &'r Ellipse,
+    binning: Binning,
+    lattice: Lattice,
+    visit: F,
+}
+
+impl<F: FnMut(usize, usize, usize)> RowReader for BinWalk<'_, '_, F> {
+    type Output = ();
+    // Mean shift's walk on RGB565 camera frames; the rest read through the
+    // general accessor.
+    const LOOPS: Loops = Loops {
+        rgb565: Loop::Always,
+        rgb888: Loop::General,
+        yuv422: Loop::General,
+        gray8: Loop::General,
+        planar_luma: Loop::General,
+    };
+
+    /// Bins of the default binning straight from the pixels.
+    #[inline(always)]
+    fn rows_of<P: PixelRead>(self) {
+        let BinWalk { frame, e, lattice, mut visit, .. } = self;
+        for_each_row(frame, e, lattice, |span| {
+            let (y, row) = (span.y, span.row);
             for (x, _) in span {
-                if let Some(bin) = Rgb565::rgb_8x8x8(row, x) {
+                if let Some(bin) = P::rgb_8x8x8(row, x) {
                     visit(x, y, bin);
                 }
             }
-        } else {
+        });
+    }
+
+    #[inline(always)]
+    fn general(self) {
+        let BinWalk { frame, e, binning, lattice, mut visit } = self;
+        for_each_row(frame, e, lattice, |span| {
+            let y = span.y;
             for (x, _) in span {
                 if let Some(rgb) = frame.rgb(x, y) {
                     visit(x, y, binning.bin(rgb));
                 }
             }
-        }
-    });
+        });
+    }
 }
 
 /// How a histogram is compared with the model.
@@ -1230,7 +1307,7 @@ pub fn bhattacharyya_distance(rho: Real) -> Real {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frame::PixelFormat;
+    use crate::pixel::{Gray8, PixelFormat, Rgb565, Rgb888};
     use crate::region::for_each_in_ellipse;
 
     #[test]

@@ -80,6 +80,7 @@ pub mod likelihood;
 pub mod meanshift;
 #[cfg(feature = "scene-motion")]
 pub(crate) mod motion;
+pub mod pixel;
 pub mod region;
 pub mod scalar;
 pub(crate) mod table;
@@ -87,14 +88,6 @@ pub mod template;
 #[cfg(test)]
 mod testing;
 pub mod tracker;
-
-/// Whether this build is for a bare-metal core without a floating-point
-/// unit (`thumbv6m-none-eabi`, the Cortex-M0+): there software floating
-/// point takes most of a frame, so a loop specialised for speed saves a
-/// small share of it, while the 48 KiB of tracker code has little room.
-/// Where a specialised loop and a general one count the same (tested), such
-/// builds take the general one; each use says what it measured.
-pub(crate) const LEAN: bool = cfg!(all(target_arch = "arm", target_os = "none", target_abi = "eabi"));
 
 pub use colour::Binning;
 pub use config::{
@@ -104,11 +97,12 @@ pub use config::{
 pub use edges::{EdgeMap, EdgeParams};
 pub use error::{ChromaPlane, ConfigError, Error, FrameError, ParamProblem, RegionError};
 pub use filter::{Dynamics, Particle, Resampling};
-pub use frame::{Frame, PixelFormat, Plane};
+pub use frame::{Frame, Plane};
 pub use geometry::{BoundingBox, Ellipse};
 pub use histogram::{Histogram, Model, SUPPORT_WORDS, Similarity};
 pub use likelihood::{Combination, Likelihood, Shape, Sigma};
 pub use meanshift::{MeanShift, MeanShiftConfig, Prediction};
+pub use pixel::PixelFormat;
 pub use region::Sampling;
 pub use scalar::Real;
 pub use tracker::{Diagnostics, Estimate, Event, ScalePrior, Trace, TrackState, Tracker, on_target};

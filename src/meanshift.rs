@@ -148,7 +148,7 @@ impl MeanShiftConfig {
         if self.lost_after == 0 || self.lost_after > 1000 {
             return Err(ConfigError { field: "lost_after", problem: ParamProblem::OutOfRange });
         }
-        check("min_half_axis", self.min_half_axis, 1.0, (crate::frame::MAX_DIMENSION / 2) as Real)
+        check("min_half_axis", self.min_half_axis, 1.0, (crate::pixel::MAX_DIMENSION / 2) as Real)
     }
 }
 

@@ -29,8 +29,9 @@
 //! the frames of the two sequences where the box is left on the background
 //! and about 5% of frames on the target.
 
-use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565};
+use crate::frame::Frame;
 use crate::geometry::Ellipse;
+use crate::pixel::{self, Loop, Loops, PixelRead, RowReader};
 use crate::scalar::{Real, sqrt};
 
 /// Lattice points per side, for the box and for the window around it.
@@ -170,17 +171,39 @@ fn sample(frame: &Frame<'_>, lattice: &Lattice, out: &mut [u8]) {
 /// their pixels shifted by `d`, over the points in the frame both times, in
 /// 1/16 grey levels; `None` if fewer than half of them are.
 fn difference(frame: &Frame<'_>, lattice: &Lattice, stored: &[u8], rows: &Rows, d: (i32, i32)) -> Option<u32> {
-    // The lean builds read every format a pixel at a time (measured with
-    // `audit/run size`: 788 B of Cortex-M0+ code less).
-    let (sum, n) = match (crate::LEAN, frame.format()) {
-        (false, PixelFormat::Rgb565) => sum_rows::<Rgb565>(frame, lattice, stored, rows, d),
-        (false, PixelFormat::Gray8 | PixelFormat::I420 | PixelFormat::Nv12) => {
-            sum_rows::<Gray8>(frame, lattice, stored, rows, d)
-        }
-        // The other formats read each pixel through the frame.
-        _ => sum_any(frame, lattice, stored, rows, d),
-    };
+    let (sum, n) = pixel::read(frame.format(), Differences { frame, lattice, stored, rows, d });
     if 2 * n as usize >= stored.len() { (sum << 4).checked_div(n) } else { None }
+}
+
+/// The sums behind [`difference`]: its arguments, read by the loops below.
+struct Differences<'f, 'r> {
+    frame: &'r Frame<'f>,
+    lattice: &'r Lattice,
+    stored: &'r [u8],
+    rows: &'r Rows,
+    d: (i32, i32),
+}
+
+impl RowReader for Differences<'_, '_> {
+    type Output = (u32, u32);
+    // The camera formats, where a loop of their own is worth its code.
+    const LOOPS: Loops = Loops {
+        rgb565: Loop::Fast,
+        rgb888: Loop::General,
+        yuv422: Loop::General,
+        gray8: Loop::Fast,
+        planar_luma: Loop::Fast,
+    };
+
+    #[inline(always)]
+    fn rows_of<P: PixelRead>(self) -> (u32, u32) {
+        sum_rows::<P>(self.frame, self.lattice, self.stored, self.rows, self.d)
+    }
+
+    #[inline(always)]
+    fn general(self) -> (u32, u32) {
+        sum_any(self.frame, self.lattice, self.stored, self.rows, self.d)
+    }
 }
 
 /// The sum of absolute differences and the count behind [`difference`] in
@@ -420,7 +443,7 @@ impl SceneMotion {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frame::PixelFormat;
+    use crate::pixel::{Gray8, PixelFormat, Rgb565};
 
     const W: usize = 160;
     const H: usize = 120;

@@ -9,8 +9,9 @@
 //! correctly normalised estimate of the same distribution, which is what makes
 //! subsampling legitimate.
 
-use crate::frame::{Frame, MAX_DIMENSION};
+use crate::frame::Frame;
 use crate::geometry::Ellipse;
+use crate::pixel::MAX_DIMENSION;
 use crate::scalar::{HARDWARE_DIVIDE, KERNEL_ONE, RADIUS2_SHIFT, Real};
 
 /// Which pixels of a region are read.

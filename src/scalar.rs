@@ -24,7 +24,7 @@ pub type Real = f32;
 ///
 /// 256 levels are far finer than the histogram quantisation, and keep a
 /// histogram's total mass below `2^32` for any frame this crate accepts
-/// (at most [`crate::frame::MAX_DIMENSION`]² pixels).
+/// (at most [`crate::pixel::MAX_DIMENSION`]² pixels).
 pub const KERNEL_ONE: u32 = 256;
 
 /// Fixed-point scale of the kernel's squared radius (`r² = 1` is `1 << 24`).

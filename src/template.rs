@@ -9,8 +9,9 @@
 //! in `[-1, 1]`: insensitive to brightness and contrast changes, high only
 //! when the layout of light and dark matches.
 
-use crate::frame::{Frame, Gray8, PixelFormat, PixelRead, Rgb565};
+use crate::frame::Frame;
 use crate::geometry::Ellipse;
+use crate::pixel::{self, Loop, Loops, PixelRead, RowReader};
 use crate::scalar::{Real, sqrt};
 
 /// Samples per side of the template grid.
@@ -138,17 +139,8 @@ fn sample(frame: &Frame<'_>, e: &Ellipse) -> Patch {
         for &y in rows {
             let Some(row) = frame.row(y) else { continue };
             let cols = xs.chunks(nx.max(1));
-            // One format dispatch per row, not per pixel: the camera formats
-            // read through their own compiled loop, except in the lean
-            // builds (measured with `audit/run size`: 304 B of Cortex-M0+
-            // code less).
-            match (crate::LEAN, frame.format()) {
-                (false, PixelFormat::Rgb565) => add_row::<Rgb565>(&mut cells, row, cols),
-                (false, PixelFormat::Gray8 | PixelFormat::I420 | PixelFormat::Nv12) => {
-                    add_row::<Gray8>(&mut cells, row, cols)
-                }
-                _ => add_row_any(frame, &mut cells, row, cols),
-            }
+            // One format dispatch per row, not per pixel.
+            pixel::read(frame.format(), CellRow { frame, cells: &mut cells, row, cols });
         }
         for (i, &c) in cells.iter().enumerate() {
             // The mean of the cell's reads, rounded.
@@ -171,6 +163,37 @@ fn add_row_any<'c>(frame: &Frame<'_>, cells: &mut [u32; GRID], row: &[u8], cols:
     }
 }
 
+/// One row of the template's grid: the lumas of `row` (a row of `frame`)
+/// at each cell's columns, added to the cell.
+struct CellRow<'f, 'r, I> {
+    frame: &'r Frame<'f>,
+    cells: &'r mut [u32; GRID],
+    row: &'f [u8],
+    cols: I,
+}
+
+impl<'c, I: Iterator<Item = &'c [usize]>> RowReader for CellRow<'_, '_, I> {
+    type Output = ();
+    // The camera formats, where a loop of their own is worth its code.
+    const LOOPS: Loops = Loops {
+        rgb565: Loop::Fast,
+        rgb888: Loop::General,
+        yuv422: Loop::General,
+        gray8: Loop::Fast,
+        planar_luma: Loop::Fast,
+    };
+
+    #[inline(always)]
+    fn rows_of<P: PixelRead>(self) {
+        add_row::<P>(self.cells, self.row, self.cols)
+    }
+
+    #[inline(always)]
+    fn general(self) {
+        add_row_any(self.frame, self.cells, self.row, self.cols)
+    }
+}
+
 /// Adds the luma of the pixels of `row` at each cell's columns to the cell.
 #[inline(always)]
 fn add_row<'c, P: PixelRead>(cells: &mut [u32; GRID], row: &[u8], cols: impl Iterator<Item = &'c [usize]>) {
@@ -183,7 +206,7 @@ fn add_row<'c, P: PixelRead>(cells: &mut [u32; GRID], row: &[u8], cols: impl Ite
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frame::PixelFormat;
+    use crate::pixel::{Gray8, PixelFormat, Rgb565};
 
     const W: usize = 120;
     const H: usize = 90;

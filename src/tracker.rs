@@ -247,7 +247,7 @@ pub struct ScalePrior {
 
 impl ScalePrior {
     fn validate(&self) -> Result<(), ConfigError> {
-        let limit = (crate::frame::MAX_DIMENSION / 2) as Real;
+        let limit = (crate::pixel::MAX_DIMENSION / 2) as Real;
         crate::config::check("prior.half_minor", self.half_minor, 1.0, limit)?;
         crate::config::check("prior.tolerance", self.tolerance, 0.0, limit)
     }
