@@ -8,8 +8,8 @@
 
 use crate::config::check;
 use crate::error::ConfigError;
+use crate::estimate::{Estimate, TrackState};
 use crate::scalar::{Real, clamp};
-use crate::tracker::{Estimate, TrackState};
 use embedded_hal::digital::OutputPin;
 use embedded_hal::pwm::SetDutyCycle;
 

@@ -53,12 +53,12 @@
 use crate::colour::Binning;
 use crate::config::check;
 use crate::error::{ConfigError, Error, ParamProblem, RegionError};
+use crate::estimate::{Estimate, Event, TrackState};
 use crate::frame::Frame;
 use crate::geometry::{BoundingBox, Ellipse};
 use crate::histogram::{Histogram, Model};
 use crate::region::{Lattice, Sampling};
 use crate::scalar::{Real, clamp, sqrt_q4};
-use crate::tracker::{Estimate, Event, TrackState};
 
 /// Where each frame's climb starts.
 #[derive(Copy, Clone, Debug, PartialEq)]

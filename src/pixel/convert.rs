@@ -31,7 +31,7 @@ pub(crate) fn yuv_centred_to_rgb(y: i32, u: i32, v: i32) -> [u8; 3] {
 }
 
 /// Full-range BT.601 RGB to YUV, the inverse of the conversion used to read
-/// [`PixelFormat::Yuv422`] frames (for tools that write such frames).
+/// [`crate::PixelFormat::Yuv422`] frames (for tools that write such frames).
 pub fn rgb_to_yuv(rgb: [u8; 3]) -> [u8; 3] {
     let [r, g, b] = [rgb[0] as i32, rgb[1] as i32, rgb[2] as i32];
     let y = (77 * r + 150 * g + 29 * b + 128) >> 8;

@@ -5,7 +5,7 @@
 //! A [`crate::Frame`] checks a buffer against its [`PixelFormat`]; every
 //! part of the tracker that reads rows (histograms, the edge map, the
 //! template, the correlation filter, the surroundings-motion test) goes
-//! through [`read`], which compiles each reader once per format it
+//! through one dispatch (`pixel::read`), which compiles each reader once per format it
 //! specialises and once for the rest.
 
 mod convert;

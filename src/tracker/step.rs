@@ -1,0 +1,447 @@
+//! One step: predict, observe, estimate, the life cycle, adapt.
+
+use super::confidence::{SPEED_RATE, TYPICAL_CONTRAST, on_target};
+use super::scratch::*;
+use super::search::*;
+use super::{ScalePrior, Tracker};
+use crate::config::{Life, ModelUpdate};
+use crate::error::Error;
+use crate::estimate::{Diagnostics, Estimate, Event, TrackState};
+use crate::filter::{Bounds, Particle, mean_state, resample};
+use crate::foreground::RING;
+use crate::frame::Frame;
+use crate::geometry::Ellipse;
+use crate::likelihood::gaussian;
+use crate::scalar::{Real, normal_from_bits, sqrt};
+use rand_core::Rng;
+
+impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tracker<N, K, E, R, T> {
+    /// Tracks one frame: resample, propagate, observe, estimate, then update
+    /// the state machine and, when the estimate is trustworthy, the model.
+    ///
+    /// The frame must have the size the tracker was initialised with; any
+    /// pixel format may be used.
+    pub fn step(&mut self, frame: &Frame<'_>) -> Result<Estimate, Error> {
+        self.step_inner(frame, None)
+    }
+
+    /// [`Tracker::step`] with an external size measurement for this frame
+    /// (see [`ScalePrior`]). A NaN, infinite or out-of-range prior is an
+    /// [`Error::Config`] naming `prior.half_minor` or `prior.tolerance`, and
+    /// the tracker is left as it was.
+    pub fn step_with_prior(&mut self, frame: &Frame<'_>, prior: ScalePrior) -> Result<Estimate, Error> {
+        prior.validate()?;
+        self.step_inner(frame, Some(prior))
+    }
+
+    /// One step, as its phases: predict where the target may be, observe
+    /// each hypothesis, weigh them, estimate (and size) the target, decide
+    /// its state, and adapt the models.
+    pub(super) fn step_inner(&mut self, frame: &Frame<'_>, prior: Option<ScalePrior>) -> Result<Estimate, Error> {
+        let target = self.target.as_ref().ok_or(Error::NotInitialised)?;
+        let size = (frame.width(), frame.height());
+        if size != target.frame {
+            return Err(Error::FrameSizeChanged { expected: target.frame, got: size });
+        }
+        self.predict(frame, prior);
+        let observed = self.observe(frame);
+        let sigma = self.weigh(observed.d2_max);
+        // An external size measurement, or the table's fixed size, decides
+        // the size: no search then.
+        let sized = prior.is_some() || (T > 0 && self.config.table.is_some());
+        let look = self.estimate(frame, &observed, !sized);
+        // Measured on every frame, so that its running means stay current.
+        #[cfg(feature = "scene-motion")]
+        let stuck =
+            self.config.scene_motion && self.motion.update(frame, &look.ellipse, self.state == TrackState::Tracking);
+        #[cfg(not(feature = "scene-motion"))]
+        let stuck = false;
+        let was_tracking = self.state == TrackState::Tracking;
+        let event = self.life_cycle(look.found && !stuck);
+        self.follow(&look.ellipse, was_tracking);
+        let model_updated = self.adapt(frame, &look, event);
+        Ok(Estimate {
+            ellipse: look.ellipse,
+            confidence: look.confidence,
+            state: self.state,
+            event,
+            appearing: observed.appearing,
+            model_updated,
+            sigma,
+            occluded_quadrant: look.occluded_quadrant,
+        })
+    }
+
+    /// Resamples in proportion to the last step's weights, moves every
+    /// particle by the dynamics, and, while the target is not tracked,
+    /// re-draws a share of them to keep exploring.
+    pub(super) fn predict(&mut self, frame: &Frame<'_>, prior: Option<ScalePrior>) {
+        let Tracker { config: cfg, rng, particles, weights, scratch, target, state, .. } = self;
+        let Some(target) = target.as_ref() else { return };
+        let (w, h) = (frame.width(), frame.height());
+        let bounds = Bounds { width: w as Real, height: h as Real, min_half: cfg.min_half_axis };
+        // On the stack: the counts live only while the set is rewritten.
+        let mut copies = [0u16; N];
+        resample(particles, weights, &mut copies, cfg.resampling, rng);
+        for p in particles.iter_mut() {
+            cfg.dynamics.propagate(p, &bounds, target.speed, rng);
+            if let Some(prior) = &prior {
+                prior.apply(p);
+            }
+            if T > 0 && cfg.table.is_some() {
+                // The table holds one window size: the target's.
+                (p.hx, p.hy) = target.half_axes;
+            }
+        }
+        if *state == TrackState::Tracking {
+            return;
+        }
+        let reseed = (cfg.reseed_fraction * N as Real) as usize;
+        let (hx, hy) = target.half_axes;
+        let spots =
+            if cfg.redetect { redetect(&mut scratch.fgmap, frame, &target.models, (hx, hy)) } else { [None; SPOTS] };
+        let found = spots.iter().flatten().count();
+        // Spread over the set: copies of one parent tend to sit together.
+        let stride = N.checked_div(reseed).unwrap_or(N).max(1);
+        for (i, p) in particles.iter_mut().step_by(stride).take(reseed).enumerate() {
+            // Every other re-drawn particle goes to one of the spots in turn.
+            let spot = if i % 2 == 0 && found > 0 { spots.get(i / 2 % found).copied().flatten() } else { None };
+            *p = match spot {
+                Some((x, y)) => {
+                    let s = 0.1 * sqrt(4.0 * hx * hy);
+                    let (dx, dy) = (normal_from_bits(rng.next_u64()), normal_from_bits(rng.next_u64()));
+                    Particle { x: x + s * dx, y: y + s * dy, hx, hy, ..Default::default() }
+                }
+                None => uniform_particle(rng, w, h, hx, hy),
+            };
+        }
+    }
+
+    /// Each particle's similarity with the models, left in `weights`.
+    pub(super) fn observe(&mut self, frame: &Frame<'_>) -> Observed {
+        let size = (frame.width(), frame.height());
+        let table = if T > 0 { self.config.table } else { None };
+        let Tracker { config: cfg, particles, scratch, target, .. } = self;
+        let Some(target) = target.as_ref() else { return Observed::default() };
+        // Edges first, once, over the region the particles cover.
+        let rect = target.models.edge.is_some().then(|| {
+            let (mut x0, mut y0, mut x1, mut y1) = (size.0, size.1, 0, 0);
+            for p in particles.iter() {
+                let (a, b, c, d) = cover(&p.ellipse(), size.0, size.1);
+                (x0, y0, x1, y1) = (x0.min(a), y0.min(b), x1.max(c), y1.max(d));
+            }
+            (x0, y0, x1, y1)
+        });
+        scratch.prepare(cfg, frame, rect, target.half_axes, target.edge_threshold);
+        // `T > 0` is known at compile time: without a table, none of its
+        // code is built into the tracker (measured: 3.5 KB of Cortex-M4 code).
+        if let Some(mode) = table {
+            self.fill_table(frame, mode);
+        }
+        let Tracker { config: cfg, particles, weights, scratch, target, table: tab, .. } = self;
+        let Some(target) = target.as_ref() else { return Observed::default() };
+        // The boundary scores (in 1/16 Sobel units; at most 1443 · 16 <
+        // 2^16) wait until the best one, their normaliser, is known.
+        let mut scores = [0u16; N];
+        let mut out = Observed { appearing: 0, g_best: 0, d2_max: target.models.d2_max(cfg) };
+        for ((p, w), g) in particles.iter().zip(weights.iter_mut()).zip(scores.iter_mut()) {
+            let e = p.ellipse();
+            let (rho, sim) = if table.is_some() {
+                tab.lookup(p.x, p.y)
+            } else {
+                let Seen { rho, sim, .. } = scratch.similarity(cfg, frame, &target.models, &e, false);
+                (rho, sim)
+            };
+            if rho > target.threshold {
+                out.appearing += 1;
+            }
+            *w = match cfg.template {
+                Some(t) => (1.0 - t.weight) * sim + t.weight * target.models.template.correlation(frame, &e).max(0.0),
+                None => sim,
+            };
+            if cfg!(feature = "boundary") && cfg.boundary.is_some() {
+                *g = boundary_q(frame, &e);
+                out.g_best = out.g_best.max(*g);
+            }
+        }
+        if let Some(b) = cfg.boundary
+            && out.g_best > 0
+        {
+            for (w, &g) in weights.iter_mut().zip(scores.iter()) {
+                *w = (1.0 - b.weight) * *w + b.weight * (g as Real / out.g_best as Real);
+            }
+        }
+        out
+    }
+
+    /// Turns the similarities in `weights` into normalised likelihoods;
+    /// returns the σ used.
+    pub(super) fn weigh(&mut self, d2_max: Real) -> Real {
+        let cfg = &self.config;
+        let best = self.weights.iter().fold(0.0 as Real, |a, &w| a.max(w));
+        let mean = self.weights.iter().sum::<Real>() / N as Real;
+        let (sigma, offset) = cfg.likelihood.sigma_and_offset(d2_max * (1.0 - best), d2_max * (1.0 - mean));
+        let mut sum = 0.0;
+        for w in self.weights.iter_mut() {
+            *w = cfg.likelihood.weight(d2_max * (1.0 - *w) - offset, sigma);
+            sum += *w;
+        }
+        if sum > 0.0 && sum.is_finite() {
+            for w in self.weights.iter_mut() {
+                *w /= sum;
+            }
+        } else {
+            self.weights = [1.0 / N as Real; N];
+        }
+        sigma
+    }
+
+    /// The weighted mean state, sized against the surroundings, and how it
+    /// compares with the models.
+    pub(super) fn estimate(&mut self, frame: &Frame<'_>, observed: &Observed, search: bool) -> Look {
+        let Tracker {
+            config: cfg,
+            particles,
+            weights,
+            scratch,
+            target,
+            state,
+            diag,
+            #[cfg(feature = "correlation")]
+            correlation,
+            ..
+        } = self;
+        let mut ellipse = mean_state(particles, weights).ellipse();
+        #[cfg_attr(not(feature = "correlation"), allow(unused_mut))]
+        let mut psr = 0.0;
+        // The texture cue first, so that the searches and the confidence
+        // measure the box where it leaves it.
+        #[cfg(feature = "correlation")]
+        if let Some(c) = cfg.correlation
+            && let Some(response) = correlation.respond(frame, &ellipse, c.padding)
+        {
+            psr = response.psr;
+            // A response with no clear peak says nothing of where the
+            // target went, nor of its size.
+            let sure = psr >= c.min_psr;
+            if sure {
+                let (dx, dy) = (c.pull * response.shift.0, c.pull * response.shift.1);
+                shift_estimate(&mut ellipse, particles, (dx, dy), frame);
+            }
+            // The scale: windows one step larger and smaller about the new
+            // centre, against the first response, whose peak is already the
+            // best match at the present size wherever it lay in the window.
+            // Not where the size is decided outside (`search` false).
+            if sure && c.scale_step > 0.0 && search {
+                let mut best = (response.peak, 1.0);
+                for s in [1.0 + c.scale_step, 1.0 / (1.0 + c.scale_step)] {
+                    let scaled = Ellipse { hx: ellipse.hx * s, hy: ellipse.hy * s, ..ellipse };
+                    if let Some(r) = correlation.respond(frame, &scaled, c.padding)
+                        && r.peak > best.0
+                    {
+                        best = (r.peak, s);
+                    }
+                }
+                let f = 1.0 + c.scale_pull * (best.1 - 1.0);
+                scale_estimate(&mut ellipse, particles, (f, f));
+            }
+        }
+        let Some(target) = target.as_ref() else {
+            return Look { ellipse, confidence: 0.0, similarity: 0.0, found: false, occluded_quadrant: None };
+        };
+        let models = &target.models;
+        let (contrast, correlation) = if cfg.uses_surroundings() {
+            // One map serves the size search and the confidence: it covers
+            // the largest candidate's ring.
+            let size = cfg.size.filter(|_| search);
+            let shift = cfg.shift.filter(|_| search);
+            let grow = 1.0 + size.map_or(0.0, |s| s.step);
+            // A shifted candidate's ring reaches `2 · step` half axes further
+            // per round.
+            let reach = RING * grow + shift.map_or(0.0, |s| 2.0 * s.step * s.rounds as Real);
+            scratch.fgmap.compute_around(frame, &ellipse, reach, &models.layout, &models.fg);
+            // The parts of the estimate's box as far as measured.
+            let mut parts = None;
+            if let Some(search) = size {
+                let (fx, fy);
+                ((fx, fy), parts) = search_size(scratch, cfg, frame, models, &ellipse, &search, target.initial_axes);
+                scale_estimate(&mut ellipse, particles, (fx, fy));
+            }
+            if let Some(shift) = shift {
+                let (dx, dy);
+                ((dx, dy), parts) = search_shift(scratch, cfg, frame, models, &ellipse, &shift, parts);
+                shift_estimate(&mut ellipse, particles, (dx, dy), frame);
+            }
+            // A box with no surroundings in the frame (it fills the frame)
+            // has no contrast to measure; it counts as a typical target's.
+            let contrast = match parts {
+                Some(p) => p.contrast,
+                None => scratch.fgmap.contrast(&ellipse, RING).unwrap_or(TYPICAL_CONTRAST),
+            };
+            (contrast, parts.and_then(|p| p.correlation))
+        } else {
+            (0.0, None)
+        };
+        let seen = scratch.similarity(cfg, frame, models, &ellipse, true);
+        let similarity = match cfg.boundary {
+            Some(b) if observed.g_best > 0 => {
+                let g = (boundary_q(frame, &ellipse) as Real / observed.g_best as Real).min(1.0);
+                (1.0 - b.weight) * seen.sim + b.weight * g
+            }
+            _ => seen.sim,
+        };
+        let occluded_quadrant =
+            if cfg!(feature = "quadrants") && cfg.quadrants { occluded(seen.quads, target.threshold) } else { None };
+        let (confidence, found) = match cfg.life {
+            Life::Appearance => (similarity, observed.appearing as Real > cfg.kickoff * N as Real),
+            Life::Confidence { lost_below, found_above } => {
+                let correlation = correlation.unwrap_or_else(|| models.template.correlation(frame, &ellipse));
+                let anchored = seen.anchored;
+                *diag = Diagnostics { contrast, correlation, anchored, similarity, psr };
+                let p = on_target(contrast, correlation, anchored);
+                (p, if *state == TrackState::Tracking { p >= lost_below } else { p > found_above })
+            }
+        };
+        Look { ellipse, confidence, similarity, found, occluded_quadrant }
+    }
+
+    /// Keeps the target's recent speed: the estimate's displacement, over
+    /// frames tracked one after another, smoothed so that one jump of the
+    /// estimate does not scatter the particles for long.
+    pub(super) fn follow(&mut self, e: &Ellipse, was_tracking: bool) {
+        let Some(target) = self.target.as_mut() else { return };
+        if was_tracking && self.state == TrackState::Tracking {
+            let (dx, dy) = (e.cx - target.centre.0, e.cy - target.centre.1);
+            target.speed += SPEED_RATE * (sqrt(dx * dx + dy * dy) - target.speed);
+        }
+        target.centre = (e.cx, e.cy);
+    }
+
+    /// Moves the state machine on whether the target was found this frame.
+    pub(super) fn life_cycle(&mut self, found: bool) -> Option<Event> {
+        match self.state {
+            TrackState::Tracking if found => {
+                self.misses = 0;
+                None
+            }
+            TrackState::Tracking => {
+                self.misses = self.misses.saturating_add(1);
+                (self.misses >= self.config.lost_after).then(|| {
+                    self.state = TrackState::Lost;
+                    Event::LostTarget
+                })
+            }
+            TrackState::Searching | TrackState::Lost if found => {
+                let event = if self.state == TrackState::Searching { Event::Acquired } else { Event::Reacquired };
+                self.state = TrackState::Tracking;
+                self.misses = 0;
+                Some(event)
+            }
+            TrackState::Searching | TrackState::Lost => None,
+        }
+    }
+
+    /// Adapts the models on steady, trustworthy tracking frames; returns
+    /// whether they were updated.
+    pub(super) fn adapt(&mut self, frame: &Frame<'_>, look: &Look, event: Option<Event>) -> bool {
+        let Tracker {
+            config: cfg,
+            scratch,
+            target,
+            state,
+            misses,
+            #[cfg(feature = "correlation")]
+            correlation,
+            ..
+        } = self;
+        let Some(target) = target.as_mut() else { return false };
+        // The filter learns on every confident frame, at its own slow rate:
+        // as a running mean over many frames it does not drift with one.
+        #[cfg(feature = "correlation")]
+        if let Some(c) = cfg.correlation
+            && look.confidence > c.learn_above
+        {
+            correlation.learn(frame, &look.ellipse, c.padding, c.rate);
+        }
+        let steady = *state == TrackState::Tracking && event.is_none() && *misses == 0 && cfg.alpha > 0.0;
+        let d2_max = target.models.d2_max(cfg);
+        let wanted = match cfg.model_update {
+            ModelUpdate::Confident => {
+                gaussian(d2_max * (1.0 - look.similarity), cfg.update_sigma) > cfg.update_threshold
+            }
+            ModelUpdate::WhenDegraded { factor, frames } => {
+                let (sum, n) = &mut target.rho0;
+                if *n < frames {
+                    // Still learning ρ₀ on the first tracking frames, where
+                    // the estimate is assumed good (as the paper does).
+                    if steady {
+                        *sum += look.similarity;
+                        *n += 1;
+                    }
+                    false
+                } else {
+                    look.similarity < factor * (*sum / *n as Real)
+                }
+            }
+        };
+        // With the confidence driving the life cycle, only a confident
+        // estimate may teach the models.
+        let trusted = match cfg.life {
+            Life::Appearance => true,
+            Life::Confidence { found_above, .. } => look.confidence > found_above,
+        };
+        let updated = steady && wanted && trusted;
+        if updated {
+            // The scratch still holds the estimate's histograms.
+            let m = &mut target.models;
+            // Weighted, the roots are recomputed below, against the
+            // surroundings blended in meanwhile.
+            if cfg.background_weight.is_some() {
+                m.colour.blend_bins(&scratch.colour, cfg.alpha);
+            } else {
+                m.colour.blend(&scratch.colour, cfg.alpha);
+            }
+            if let Some(edge) = m.edge.as_mut() {
+                edge.blend(&scratch.edge, cfg.alpha);
+            }
+            if let Some(t) = cfg.template {
+                m.template.blend(frame, &look.ellipse, t.rate);
+            }
+            if cfg.uses_surroundings() {
+                // The estimate's histogram is blended in: its memory is free.
+                m.fg.learn(frame, &look.ellipse, (&m.layout, &m.colour), cfg.surroundings_rate, &mut scratch.colour);
+            }
+            if let Some(b) = cfg.background_weight {
+                m.colour.reweight(m.fg.odds(), b);
+            }
+        }
+        if *state == TrackState::Tracking {
+            target.half_axes = (look.ellipse.hx, look.ellipse.hy);
+        }
+        updated
+    }
+}
+
+/// What observing the particles found.
+#[derive(Copy, Clone, Debug, Default)]
+pub(super) struct Observed {
+    /// Particles that pass the appearance test.
+    pub(super) appearing: u16,
+    /// The best boundary score (0 without the boundary cue).
+    pub(super) g_best: u16,
+    /// The largest squared distance the active cues can produce.
+    pub(super) d2_max: Real,
+}
+
+/// The estimate and what it looks like.
+#[derive(Copy, Clone, Debug)]
+pub(super) struct Look {
+    pub(super) ellipse: Ellipse,
+    /// What [`Estimate::confidence`] reports.
+    pub(super) confidence: Real,
+    /// Similarity of the estimate with the models (and the boundary cue).
+    pub(super) similarity: Real,
+    /// Whether the life cycle counts the target as seen in this frame.
+    pub(super) found: bool,
+    pub(super) occluded_quadrant: Option<u8>,
+}
