@@ -1,4 +1,4 @@
-//! OTB one-pass evaluation (DESIGN.md §3): success AUC and precision@20.
+//! OTB one-pass evaluation (docs/accuracy.md, "The data and the protocol"): success AUC and precision@20.
 
 use pftrack::BoundingBox;
 
