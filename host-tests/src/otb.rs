@@ -1,7 +1,7 @@
 //! OTB-format sequences: a folder with `img/` (frames sorted by name, JPEG or
 //! PNG) and `groundtruth.txt` (one `x,y,w,h` per line).
 
-use crate::source::{FrameSource, ImageFolder};
+use crate::source::{FrameSource, ImageFolder, images_in};
 use pftrack::BoundingBox;
 use std::path::{Path, PathBuf};
 
@@ -29,25 +29,6 @@ pub fn parse_groundtruth(text: &str) -> Result<Vec<BoundingBox>, String> {
         return Err("no boxes".into());
     }
     Ok(out)
-}
-
-/// The JPEG and PNG files directly in `dir`, sorted by name.
-pub fn images_in(dir: &Path) -> Result<Vec<PathBuf>, String> {
-    let rd = std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-    let mut files: Vec<PathBuf> = rd
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| {
-            p.extension()
-                .and_then(|e| e.to_str())
-                .map(|e| e.to_ascii_lowercase())
-                .is_some_and(|e| matches!(e.as_str(), "jpg" | "jpeg" | "png"))
-        })
-        .collect();
-    files.sort();
-    if files.is_empty() {
-        return Err(format!("{}: no JPEG or PNG frames", dir.display()));
-    }
-    Ok(files)
 }
 
 /// The frame files of a sequence (in its `img/`), sorted by name.

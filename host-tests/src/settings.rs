@@ -7,59 +7,127 @@ use pftrack::{
     SizeSearch,
 };
 
-/// The keys `apply` understands, with what they set.
-pub const KEYS: &[(&str, &str)] = &[
-    ("sampling", "full | checkerboard | quarter"),
-    ("resampling", "multinomial | systematic"),
-    ("binning", "rgb8x8x8 | hsv8x8x4 | rgb4x4x4 | adaptive (Birgé–Rozenholc)"),
-    ("quadrants", "on | off (four quadrant histograms, median similarity)"),
-    ("similarity", "bhattacharyya | intersection"),
-    ("shape", "gaussian | exponential (likelihood exp(-d²/2σ²) or exp(-d/σ))"),
-    ("model_update", "confident | degraded:C:FRAMES (update when confidence < C·ρ₀)"),
-    ("max_samples", "most pixels read per region and cue, 0 = all"),
-    ("edges", "off | BINS:THRESHOLD[:flat], e.g. 8:100:flat (flat: weak pixels get a bin)"),
-    (
+/// Parses one key's value into the configuration; given the key, for its
+/// error messages.
+type Parse = fn(&mut Config, &str, &str) -> Result<(), String>;
+
+/// A key `apply` understands: its name, what it sets (the help text), and
+/// its parser.
+pub struct Key {
+    /// The name before the `=`.
+    pub name: &'static str,
+    /// What the key sets, and the values it takes.
+    pub help: &'static str,
+    parse: Parse,
+}
+
+const fn key(name: &'static str, help: &'static str, parse: Parse) -> Key {
+    Key { name, help, parse }
+}
+
+/// The keys `apply` understands, with what they set and how they are read.
+pub const KEYS: &[Key] = &[
+    key("sampling", "full | checkerboard | quarter", sampling),
+    key("resampling", "multinomial | systematic", resampling),
+    key("binning", "rgb8x8x8 | hsv8x8x4 | rgb4x4x4 | adaptive (Birgé–Rozenholc)", binning),
+    key("quadrants", "on | off (four quadrant histograms, median similarity)", |c, k, v| {
+        set(&mut c.quadrants, on_off(k, v))
+    }),
+    key("similarity", "bhattacharyya | intersection", similarity),
+    key("shape", "gaussian | exponential (likelihood exp(-d²/2σ²) or exp(-d/σ))", shape),
+    key("model_update", "confident | degraded:C:FRAMES (update when confidence < C·ρ₀)", model_update),
+    key("max_samples", "most pixels read per region and cue, 0 = all", max_samples),
+    key("edges", "off | BINS:THRESHOLD[:flat], e.g. 8:100:flat (flat: weak pixels get a bin)", edges),
+    key(
         "strong_percent",
         "P: the edge threshold drops to what P% of the first box's pixels reach, if fewer reach it (0: fixed)",
+        strong_percent,
     ),
-    ("combination", "product | weighted:W (W = colour weight)"),
-    ("boundary", "off | W (ellipse-boundary gradient cue with share W)"),
-    ("table", "off | SPACING (likelihood-table mode, grid spacing in px)"),
-    ("sigma", "fixed σ, e.g. 0.2"),
-    ("adaptive_sigma", "MIN:MAX, e.g. 0.02:0.5 (σ chosen per frame)"),
-    ("spread_sigma", "SPREAD:MIN:MAX, e.g. 8:0.005:0.5 (σ from the particles' spread)"),
-    ("eps", "likelihood floor ε"),
-    ("position_noise", "fraction of target size per frame"),
-    ("velocity_noise", "fraction of target size per frame"),
-    ("velocity_decay", "v <- decay * v + noise; 1 = constant velocity"),
-    ("speed_noise", "position noise at least this times the target's recent speed (px/frame)"),
-    ("scale_noise", "relative, per frame"),
-    ("scale_rate_noise", "per frame"),
-    ("alpha", "model adaptation rate"),
-    ("update_threshold", "π_T"),
-    ("update_sigma", "σ of the model-update gate"),
-    ("appearance_sigmas", "k in ρ > μ + kσ"),
-    ("min_appearance", "floor of the appearance threshold"),
-    ("kickoff", "b"),
-    ("lost_after", "frames"),
-    ("reseed_fraction", "fraction re-drawn per frame while searching"),
-    ("min_half_axis", "pixels"),
-    ("template", "off | WEIGHT:RATE (grey template cue, NCC, share WEIGHT, adaptation RATE)"),
-    ("life", "appearance | confidence:LOST:FOUND (what drives the tracking / lost states)"),
-    ("redetect", "on | off (re-drawn particles go where the target's colours stand out while lost)"),
-    ("scene_motion", "on | off (a box that moves with its surroundings counts as a miss, for a target seen to move)"),
-    ("size", "off | STEP:SIMILARITY:ASPECT_PULL:SCALE_PULL | STEP:SIMILARITY:scale:SCALE_PULL | STEP:SIMILARITY"),
-    ("surroundings_rate", "adaptation rate of the surroundings' histogram"),
-    (
+    key("combination", "product | weighted:W (W = colour weight)", combination),
+    key("boundary", "off | W (ellipse-boundary gradient cue with share W)", boundary),
+    key("table", "off | SPACING (likelihood-table mode, grid spacing in px)", table),
+    key("sigma", "fixed σ, e.g. 0.2", |c, k, v| set(&mut c.likelihood.sigma, num(k, v).map(Sigma::Fixed))),
+    key("adaptive_sigma", "MIN:MAX, e.g. 0.02:0.5 (σ chosen per frame)", adaptive_sigma),
+    key("spread_sigma", "SPREAD:MIN:MAX, e.g. 8:0.005:0.5 (σ from the particles' spread)", spread_sigma),
+    key("eps", "likelihood floor ε", |c, k, v| set(&mut c.likelihood.eps, num(k, v))),
+    key("position_noise", "fraction of target size per frame", |c, k, v| {
+        set(&mut c.dynamics.position_noise, num(k, v))
+    }),
+    key("velocity_noise", "fraction of target size per frame", |c, k, v| {
+        set(&mut c.dynamics.velocity_noise, num(k, v))
+    }),
+    key("velocity_decay", "v <- decay * v + noise; 1 = constant velocity", |c, k, v| {
+        set(&mut c.dynamics.velocity_decay, num(k, v))
+    }),
+    key("speed_noise", "position noise at least this times the target's recent speed (px/frame)", |c, k, v| {
+        set(&mut c.dynamics.speed_noise, num(k, v))
+    }),
+    key("scale_noise", "relative, per frame", |c, k, v| set(&mut c.dynamics.scale_noise, num(k, v))),
+    key("scale_rate_noise", "per frame", |c, k, v| set(&mut c.dynamics.scale_rate_noise, num(k, v))),
+    key("alpha", "model adaptation rate", |c, k, v| set(&mut c.alpha, num(k, v))),
+    key("update_threshold", "π_T", |c, k, v| set(&mut c.update_threshold, num(k, v))),
+    key("update_sigma", "σ of the model-update gate", |c, k, v| set(&mut c.update_sigma, num(k, v))),
+    key("appearance_sigmas", "k in ρ > μ + kσ", |c, k, v| set(&mut c.appearance_sigmas, num(k, v))),
+    key("min_appearance", "floor of the appearance threshold", |c, k, v| set(&mut c.min_appearance, num(k, v))),
+    key("kickoff", "b", |c, k, v| set(&mut c.kickoff, num(k, v))),
+    key("lost_after", "frames", lost_after),
+    key("reseed_fraction", "fraction re-drawn per frame while searching", |c, k, v| {
+        set(&mut c.reseed_fraction, num(k, v))
+    }),
+    key("min_half_axis", "pixels", |c, k, v| set(&mut c.min_half_axis, num(k, v))),
+    key("template", "off | WEIGHT:RATE (grey template cue, NCC, share WEIGHT, adaptation RATE)", template),
+    key("life", "appearance | confidence:LOST:FOUND (what drives the tracking / lost states)", life),
+    key("redetect", "on | off (re-drawn particles go where the target's colours stand out while lost)", |c, k, v| {
+        set(&mut c.redetect, on_off(k, v))
+    }),
+    key(
+        "scene_motion",
+        "on | off (a box that moves with its surroundings counts as a miss, for a target seen to move)",
+        |c, k, v| set(&mut c.scene_motion, on_off(k, v)),
+    ),
+    key(
+        "size",
+        "off | STEP:SIMILARITY:ASPECT_PULL:SCALE_PULL | STEP:SIMILARITY:scale:SCALE_PULL | STEP:SIMILARITY",
+        size,
+    ),
+    key("surroundings_rate", "adaptation rate of the surroundings' histogram", |c, k, v| {
+        set(&mut c.surroundings_rate, num(k, v))
+    }),
+    key(
         "shift",
         "off | STEP:ROUNDS:SIMILARITY:TEMPLATE (position hill-climbed against the surroundings, steps of STEP box sizes)",
+        shift,
     ),
-    (
+    key(
         "correlation",
         "off | on | PADDING:RATE:LEARN_ABOVE:PULL[:SCALE_STEP:SCALE_PULL[:MIN_PSR]] (correlation filter on the grey levels; on = 2:0.05:0.7:0.7:0.03:0.3:3)",
+        correlation,
     ),
-    ("background_weight", "STRENGTH[:ABOVE] | off (colour model weighted against the surroundings; 1 is CBWH)"),
+    key(
+        "background_weight",
+        "STRENGTH[:ABOVE] | off (colour model weighted against the surroundings; 1 is CBWH)",
+        background_weight,
+    ),
 ];
+
+/// Applies one `key=value` setting to `c`.
+pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
+    let (key, v) = setting.split_once('=').ok_or_else(|| format!("`{setting}`: expected key=value"))?;
+    let (key, v) = (key.trim(), v.trim());
+    match KEYS.iter().find(|k| k.name == key) {
+        Some(k) => (k.parse)(c, key, v),
+        None => {
+            let known: Vec<&str> = KEYS.iter().map(|k| k.name).collect();
+            Err(format!("unknown setting `{key}`; known: {}", known.join(", ")))
+        }
+    }
+}
+
+/// Stores a parsed value in its field.
+fn set<T>(field: &mut T, value: Result<T, String>) -> Result<(), String> {
+    *field = value?;
+    Ok(())
+}
 
 fn num(key: &str, v: &str) -> Result<f32, String> {
     v.parse::<f32>().map_err(|_| format!("{key}: `{v}` is not a number"))
@@ -74,229 +142,228 @@ fn choice<T: Copy>(key: &str, v: &str, options: &[(&str, T)]) -> Result<T, Strin
     Err(format!("{key}: `{v}` is not one of {}", names.join(", ")))
 }
 
-/// Applies one `key=value` setting to `c`.
-pub fn apply(c: &mut Config, setting: &str) -> Result<(), String> {
-    let (key, v) = setting.split_once('=').ok_or_else(|| format!("`{setting}`: expected key=value"))?;
-    let (key, v) = (key.trim(), v.trim());
-    match key {
-        "sampling" => {
-            c.sampling = choice(
-                key,
-                v,
-                &[("full", Sampling::Full), ("checkerboard", Sampling::Checkerboard), ("quarter", Sampling::Quarter)],
-            )?
+fn on_off(key: &str, v: &str) -> Result<bool, String> {
+    choice(key, v, &[("on", true), ("off", false)])
+}
+
+fn sampling(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    let options = [("full", Sampling::Full), ("checkerboard", Sampling::Checkerboard), ("quarter", Sampling::Quarter)];
+    set(&mut c.sampling, choice(key, v, &options))
+}
+
+fn resampling(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    let options = [("multinomial", Resampling::Multinomial), ("systematic", Resampling::Systematic)];
+    set(&mut c.resampling, choice(key, v, &options))
+}
+
+fn binning(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    let options = [
+        ("rgb8x8x8", Binning::Rgb8x8x8),
+        ("hsv8x8x4", Binning::Hsv8x8x4),
+        ("rgb4x4x4", Binning::Rgb4x4x4),
+        ("adaptive", Binning::Adaptive),
+    ];
+    set(&mut c.binning, choice(key, v, &options))
+}
+
+fn similarity(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    let options = [("bhattacharyya", Similarity::Bhattacharyya), ("intersection", Similarity::Intersection)];
+    set(&mut c.similarity, choice(key, v, &options))
+}
+
+fn shape(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    let options = [("gaussian", Shape::Gaussian), ("exponential", Shape::Exponential)];
+    set(&mut c.likelihood.shape, choice(key, v, &options))
+}
+
+fn model_update(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    c.model_update = if v == "confident" {
+        ModelUpdate::Confident
+    } else if let Some(rest) = v.strip_prefix("degraded:") {
+        let (f, n) = rest.split_once(':').ok_or_else(|| format!("model_update: `{v}` is not degraded:C:FRAMES"))?;
+        ModelUpdate::WhenDegraded {
+            factor: num(key, f)?,
+            frames: n.parse().map_err(|_| format!("model_update: `{n}` is not a frame count"))?,
         }
-        "resampling" => {
-            c.resampling =
-                choice(key, v, &[("multinomial", Resampling::Multinomial), ("systematic", Resampling::Systematic)])?
+    } else {
+        return Err(format!("model_update: `{v}` is not confident or degraded:C:FRAMES"));
+    };
+    Ok(())
+}
+
+fn strong_percent(c: &mut Config, _key: &str, v: &str) -> Result<(), String> {
+    let p = v.parse().map_err(|_| format!("strong_percent: `{v}` is not a whole percentage"))?;
+    match c.edges.as_mut() {
+        Some(e) => e.strong_percent = p,
+        None => return Err("strong_percent: the edge cue is off".into()),
+    }
+    Ok(())
+}
+
+fn max_samples(c: &mut Config, _key: &str, v: &str) -> Result<(), String> {
+    set(&mut c.max_samples, v.parse().map_err(|_| format!("max_samples: `{v}` is not a whole number")))
+}
+
+fn edges(c: &mut Config, _key: &str, v: &str) -> Result<(), String> {
+    c.edges = if v == "off" {
+        None
+    } else {
+        let mut parts = v.split(':');
+        let (b, t, flat) = (parts.next(), parts.next(), parts.next());
+        let (Some(b), Some(t)) = (b, t) else {
+            return Err(format!("edges: `{v}` is not off or BINS:THRESHOLD[:flat]"));
+        };
+        if !matches!(flat, None | Some("flat")) || parts.next().is_some() {
+            return Err(format!("edges: `{v}` is not off or BINS:THRESHOLD[:flat]"));
         }
-        "binning" => {
-            c.binning = choice(
-                key,
-                v,
-                &[
-                    ("rgb8x8x8", Binning::Rgb8x8x8),
-                    ("hsv8x8x4", Binning::Hsv8x8x4),
-                    ("rgb4x4x4", Binning::Rgb4x4x4),
-                    ("adaptive", Binning::Adaptive),
-                ],
-            )?
+        Some(EdgeCue {
+            bins: b.parse().map_err(|_| format!("edges: `{b}` is not a bin count"))?,
+            threshold: t.parse().map_err(|_| format!("edges: `{t}` is not a threshold"))?,
+            flat_bin: flat.is_some(),
+            strong_percent: c.edges.or(Config::default().edges).map_or(0, |e| e.strong_percent),
+        })
+    };
+    Ok(())
+}
+
+fn combination(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    c.combination = if v == "product" {
+        Combination::Product
+    } else if let Some(w) = v.strip_prefix("weighted:") {
+        Combination::Weighted { colour: num(key, w)? }
+    } else {
+        return Err(format!("combination: `{v}` is not product or weighted:W"));
+    };
+    Ok(())
+}
+
+fn table(c: &mut Config, _key: &str, v: &str) -> Result<(), String> {
+    c.table = if v == "off" {
+        None
+    } else {
+        Some(pftrack::TableMode { spacing: v.parse().map_err(|_| format!("table: `{v}` is not off or a spacing"))? })
+    };
+    Ok(())
+}
+
+fn boundary(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    c.boundary = if v == "off" { None } else { Some(pftrack::BoundaryCue { weight: num(key, v)? }) };
+    Ok(())
+}
+
+fn adaptive_sigma(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    let (lo, hi) = v.split_once(':').ok_or_else(|| format!("adaptive_sigma: `{v}` is not MIN:MAX"))?;
+    c.likelihood.sigma = Sigma::Adaptive { min: num(key, lo)?, max: num(key, hi)? };
+    Ok(())
+}
+
+fn spread_sigma(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    let p: Vec<&str> = v.split(':').collect();
+    let [a, lo, hi] = p.as_slice() else { return Err(format!("spread_sigma: `{v}` is not SPREAD:MIN:MAX")) };
+    c.likelihood.sigma = Sigma::Spread { spread: num(key, a)?, min: num(key, lo)?, max: num(key, hi)? };
+    Ok(())
+}
+
+fn lost_after(c: &mut Config, _key: &str, v: &str) -> Result<(), String> {
+    set(&mut c.lost_after, v.parse().map_err(|_| format!("lost_after: `{v}` is not a whole number")))
+}
+
+fn size(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    // (step, similarity, aspect searched, aspect pull, area pull)
+    let (step, sim, aspect, ap, sp) = match v.split(':').collect::<Vec<_>>().as_slice() {
+        ["off"] => {
+            c.size = None;
+            return Ok(());
         }
-        "quadrants" => c.quadrants = choice(key, v, &[("on", true), ("off", false)])?,
-        "similarity" => {
-            c.similarity = choice(
-                key,
-                v,
-                &[("bhattacharyya", Similarity::Bhattacharyya), ("intersection", Similarity::Intersection)],
-            )?
+        [step, sim] => (*step, *sim, true, "0", "0"),
+        [step, sim, "scale", sp] => (*step, *sim, false, "0", *sp),
+        [step, sim, ap, sp] => (*step, *sim, true, *ap, *sp),
+        _ => {
+            return Err(format!(
+                "{key}: `{v}`: expected off, STEP:SIMILARITY:ASPECT_PULL:SCALE_PULL, STEP:SIMILARITY:scale:SCALE_PULL or STEP:SIMILARITY (no pulls)"
+            ));
         }
-        "shape" => {
-            c.likelihood.shape = choice(key, v, &[("gaussian", Shape::Gaussian), ("exponential", Shape::Exponential)])?
-        }
-        "model_update" => {
-            c.model_update = if v == "confident" {
-                ModelUpdate::Confident
-            } else if let Some(rest) = v.strip_prefix("degraded:") {
-                let (f, n) =
-                    rest.split_once(':').ok_or_else(|| format!("model_update: `{v}` is not degraded:C:FRAMES"))?;
-                ModelUpdate::WhenDegraded {
-                    factor: num(key, f)?,
-                    frames: n.parse().map_err(|_| format!("model_update: `{n}` is not a frame count"))?,
-                }
-            } else {
-                return Err(format!("model_update: `{v}` is not confident or degraded:C:FRAMES"));
-            }
-        }
-        "strong_percent" => {
-            let p = v.parse().map_err(|_| format!("strong_percent: `{v}` is not a whole percentage"))?;
-            match c.edges.as_mut() {
-                Some(e) => e.strong_percent = p,
-                None => return Err("strong_percent: the edge cue is off".into()),
-            }
-        }
-        "max_samples" => c.max_samples = v.parse().map_err(|_| format!("max_samples: `{v}` is not a whole number"))?,
-        "edges" => {
-            c.edges = if v == "off" {
-                None
-            } else {
-                let mut parts = v.split(':');
-                let (b, t, flat) = (parts.next(), parts.next(), parts.next());
-                let (Some(b), Some(t)) = (b, t) else {
-                    return Err(format!("edges: `{v}` is not off or BINS:THRESHOLD[:flat]"));
-                };
-                if !matches!(flat, None | Some("flat")) || parts.next().is_some() {
-                    return Err(format!("edges: `{v}` is not off or BINS:THRESHOLD[:flat]"));
-                }
-                Some(EdgeCue {
-                    bins: b.parse().map_err(|_| format!("edges: `{b}` is not a bin count"))?,
-                    threshold: t.parse().map_err(|_| format!("edges: `{t}` is not a threshold"))?,
-                    flat_bin: flat.is_some(),
-                    strong_percent: c.edges.or(Config::default().edges).map_or(0, |e| e.strong_percent),
-                })
-            }
-        }
-        "combination" => {
-            c.combination = if v == "product" {
-                Combination::Product
-            } else if let Some(w) = v.strip_prefix("weighted:") {
-                Combination::Weighted { colour: num(key, w)? }
-            } else {
-                return Err(format!("combination: `{v}` is not product or weighted:W"));
-            }
-        }
-        "table" => {
-            c.table = if v == "off" {
-                None
-            } else {
-                Some(pftrack::TableMode {
-                    spacing: v.parse().map_err(|_| format!("table: `{v}` is not off or a spacing"))?,
-                })
-            }
-        }
-        "boundary" => c.boundary = if v == "off" { None } else { Some(pftrack::BoundaryCue { weight: num(key, v)? }) },
-        "sigma" => c.likelihood.sigma = Sigma::Fixed(num(key, v)?),
-        "adaptive_sigma" => {
-            let (lo, hi) = v.split_once(':').ok_or_else(|| format!("adaptive_sigma: `{v}` is not MIN:MAX"))?;
-            c.likelihood.sigma = Sigma::Adaptive { min: num(key, lo)?, max: num(key, hi)? };
-        }
-        "spread_sigma" => {
-            let p: Vec<&str> = v.split(':').collect();
-            let [a, lo, hi] = p.as_slice() else { return Err(format!("spread_sigma: `{v}` is not SPREAD:MIN:MAX")) };
-            c.likelihood.sigma = Sigma::Spread { spread: num(key, a)?, min: num(key, lo)?, max: num(key, hi)? };
-        }
-        "eps" => c.likelihood.eps = num(key, v)?,
-        "position_noise" => c.dynamics.position_noise = num(key, v)?,
-        "velocity_noise" => c.dynamics.velocity_noise = num(key, v)?,
-        "velocity_decay" => c.dynamics.velocity_decay = num(key, v)?,
-        "speed_noise" => c.dynamics.speed_noise = num(key, v)?,
-        "scale_noise" => c.dynamics.scale_noise = num(key, v)?,
-        "scale_rate_noise" => c.dynamics.scale_rate_noise = num(key, v)?,
-        "alpha" => c.alpha = num(key, v)?,
-        "update_threshold" => c.update_threshold = num(key, v)?,
-        "update_sigma" => c.update_sigma = num(key, v)?,
-        "appearance_sigmas" => c.appearance_sigmas = num(key, v)?,
-        "min_appearance" => c.min_appearance = num(key, v)?,
-        "kickoff" => c.kickoff = num(key, v)?,
-        "lost_after" => c.lost_after = v.parse().map_err(|_| format!("lost_after: `{v}` is not a whole number"))?,
-        "reseed_fraction" => c.reseed_fraction = num(key, v)?,
-        "min_half_axis" => c.min_half_axis = num(key, v)?,
-        "size" => {
-            // (step, similarity, aspect searched, aspect pull, area pull)
-            let (step, sim, aspect, ap, sp) = match v.split(':').collect::<Vec<_>>().as_slice() {
-                ["off"] => {
-                    c.size = None;
-                    return Ok(());
-                }
-                [step, sim] => (*step, *sim, true, "0", "0"),
-                [step, sim, "scale", sp] => (*step, *sim, false, "0", *sp),
-                [step, sim, ap, sp] => (*step, *sim, true, *ap, *sp),
-                _ => {
-                    return Err(format!(
-                        "{key}: `{v}`: expected off, STEP:SIMILARITY:ASPECT_PULL:SCALE_PULL, STEP:SIMILARITY:scale:SCALE_PULL or STEP:SIMILARITY (no pulls)"
-                    ));
-                }
+    };
+    c.size = Some(SizeSearch {
+        step: num(key, step)?,
+        similarity: num(key, sim)?,
+        aspect,
+        aspect_pull: num(key, ap)?,
+        scale_pull: num(key, sp)?,
+    });
+    Ok(())
+}
+
+fn shift(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    c.shift = match v.split(':').collect::<Vec<_>>().as_slice() {
+        ["off"] => None,
+        [step, rounds, sim, template] => Some(pftrack::ShiftSearch {
+            step: num(key, step)?,
+            rounds: rounds.parse().map_err(|_| format!("{key}: `{rounds}` is not a whole number"))?,
+            similarity: num(key, sim)?,
+            template: num(key, template)?,
+        }),
+        _ => return Err(format!("{key}: `{v}`: expected off or STEP:ROUNDS:SIMILARITY:TEMPLATE")),
+    };
+    Ok(())
+}
+
+fn template(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    c.template = if v == "off" {
+        None
+    } else {
+        let (w, r) = v.split_once(':').ok_or_else(|| format!("{key}: `{v}`: expected off or WEIGHT:RATE"))?;
+        Some(pftrack::TemplateCue { weight: num(key, w)?, rate: num(key, r)? })
+    };
+    Ok(())
+}
+
+fn life(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    c.life = match v.split(':').collect::<Vec<_>>().as_slice() {
+        ["appearance"] => Life::Appearance,
+        ["confidence", lost, found] => Life::Confidence { lost_below: num(key, lost)?, found_above: num(key, found)? },
+        _ => return Err(format!("{key}: `{v}`: expected appearance or confidence:LOST:FOUND")),
+    };
+    Ok(())
+}
+
+fn correlation(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    c.correlation = match v.split(':').collect::<Vec<_>>().as_slice() {
+        ["off"] => None,
+        ["on"] => Some(pftrack::CorrelationCue::MEASURED),
+        [padding, rate, above, pull, scale @ ..] => {
+            let (scale_step, scale_pull, min_psr) = match scale {
+                [] => (0.0, 0.0, 0.0),
+                [step, pull] => (num(key, step)?, num(key, pull)?, 0.0),
+                [step, pull, psr] => (num(key, step)?, num(key, pull)?, num(key, psr)?),
+                _ => return Err(format!("{key}: `{v}`: a scale search needs SCALE_STEP:SCALE_PULL[:MIN_PSR]")),
             };
-            c.size = Some(SizeSearch {
-                step: num(key, step)?,
-                similarity: num(key, sim)?,
-                aspect,
-                aspect_pull: num(key, ap)?,
-                scale_pull: num(key, sp)?,
-            });
-        }
-        "shift" => {
-            c.shift = match v.split(':').collect::<Vec<_>>().as_slice() {
-                ["off"] => None,
-                [step, rounds, sim, template] => Some(pftrack::ShiftSearch {
-                    step: num(key, step)?,
-                    rounds: rounds.parse().map_err(|_| format!("{key}: `{rounds}` is not a whole number"))?,
-                    similarity: num(key, sim)?,
-                    template: num(key, template)?,
-                }),
-                _ => return Err(format!("{key}: `{v}`: expected off or STEP:ROUNDS:SIMILARITY:TEMPLATE")),
-            }
-        }
-        "template" => {
-            c.template = if v == "off" {
-                None
-            } else {
-                let (w, r) = v.split_once(':').ok_or_else(|| format!("{key}: `{v}`: expected off or WEIGHT:RATE"))?;
-                Some(pftrack::TemplateCue { weight: num(key, w)?, rate: num(key, r)? })
-            }
-        }
-        "life" => {
-            c.life = match v.split(':').collect::<Vec<_>>().as_slice() {
-                ["appearance"] => Life::Appearance,
-                ["confidence", lost, found] => {
-                    Life::Confidence { lost_below: num(key, lost)?, found_above: num(key, found)? }
-                }
-                _ => return Err(format!("{key}: `{v}`: expected appearance or confidence:LOST:FOUND")),
-            }
-        }
-        "redetect" => c.redetect = choice(key, v, &[("on", true), ("off", false)])?,
-        "scene_motion" => c.scene_motion = choice(key, v, &[("on", true), ("off", false)])?,
-        "surroundings_rate" => c.surroundings_rate = num(key, v)?,
-        "correlation" => {
-            c.correlation = match v.split(':').collect::<Vec<_>>().as_slice() {
-                ["off"] => None,
-                ["on"] => Some(pftrack::CorrelationCue::MEASURED),
-                [padding, rate, above, pull, scale @ ..] => {
-                    let (scale_step, scale_pull, min_psr) = match scale {
-                        [] => (0.0, 0.0, 0.0),
-                        [step, pull] => (num(key, step)?, num(key, pull)?, 0.0),
-                        [step, pull, psr] => (num(key, step)?, num(key, pull)?, num(key, psr)?),
-                        _ => return Err(format!("{key}: `{v}`: a scale search needs SCALE_STEP:SCALE_PULL[:MIN_PSR]")),
-                    };
-                    Some(pftrack::CorrelationCue {
-                        padding: num(key, padding)?,
-                        rate: num(key, rate)?,
-                        learn_above: num(key, above)?,
-                        pull: num(key, pull)?,
-                        scale_step,
-                        scale_pull,
-                        min_psr,
-                    })
-                }
-                _ => {
-                    return Err(format!(
-                        "{key}: `{v}`: expected off, on or PADDING:RATE:LEARN_ABOVE:PULL[:SCALE_STEP:SCALE_PULL]"
-                    ));
-                }
-            }
-        }
-        "background_weight" => {
-            c.background_weight = match v.split(':').collect::<Vec<_>>().as_slice() {
-                ["off"] => None,
-                [s] => Some(pftrack::BackgroundWeight { strength: num(key, s)?, above: 0.0 }),
-                [s, a] => Some(pftrack::BackgroundWeight { strength: num(key, s)?, above: num(key, a)? }),
-                _ => return Err(format!("{key}: expected STRENGTH[:ABOVE] or off, got {v:?}")),
-            }
+            Some(pftrack::CorrelationCue {
+                padding: num(key, padding)?,
+                rate: num(key, rate)?,
+                learn_above: num(key, above)?,
+                pull: num(key, pull)?,
+                scale_step,
+                scale_pull,
+                min_psr,
+            })
         }
         _ => {
-            let known: Vec<&str> = KEYS.iter().map(|(k, _)| *k).collect();
-            return Err(format!("unknown setting `{key}`; known: {}", known.join(", ")));
+            return Err(format!(
+                "{key}: `{v}`: expected off, on or PADDING:RATE:LEARN_ABOVE:PULL[:SCALE_STEP:SCALE_PULL]"
+            ));
         }
-    }
+    };
+    Ok(())
+}
+
+fn background_weight(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    c.background_weight = match v.split(':').collect::<Vec<_>>().as_slice() {
+        ["off"] => None,
+        [s] => Some(pftrack::BackgroundWeight { strength: num(key, s)?, above: 0.0 }),
+        [s, a] => Some(pftrack::BackgroundWeight { strength: num(key, s)?, above: num(key, a)? }),
+        _ => return Err(format!("{key}: expected STRENGTH[:ABOVE] or off, got {v:?}")),
+    };
     Ok(())
 }
 
@@ -307,8 +374,9 @@ mod tests {
     #[test]
     fn every_listed_key_is_accepted() {
         // Reason: KEYS is the help text; each must be a real setting.
-        for (k, _) in KEYS {
-            let v = match *k {
+        for key in KEYS {
+            let k = key.name;
+            let v = match k {
                 "sampling" => "quarter",
                 "resampling" => "multinomial",
                 "binning" => "hsv8x8x4",

@@ -4,7 +4,6 @@
 //! a time from a buffer it reuses, so memory does not grow with the length
 //! of the input, and every error names the frame it happened in.
 
-use crate::otb;
 use pftrack::frame::yuv_to_rgb;
 use pftrack::{BoundingBox, Frame, PixelFormat};
 use pftrack_fixture::{HEADER_LEN, Header, RECORD_META_LEN, RecordMeta};
@@ -96,8 +95,8 @@ pub fn open(input: &str, raw: Option<RawSpec>) -> Result<Box<dyn FrameSource>, S
         return Ok(Box::new(Y4m::new(reader()?).map_err(|e| format!("standard input: {e}"))?));
     }
     if path.is_dir() {
-        let files = otb::images_in(path)
-            .or_else(|_| otb::images_in(&path.join("img")))
+        let files = images_in(path)
+            .or_else(|_| images_in(&path.join("img")))
             .map_err(|_| format!("{input}: no JPEG or PNG images in the folder or its img/"))?;
         return Ok(Box::new(ImageFolder::new(files)));
     }
@@ -337,6 +336,25 @@ impl FrameSource for Y4m {
         };
         Frame::packed(&self.buf, w, h, format).map(Some).map_err(|e| format!("frame {n}: {e}"))
     }
+}
+
+/// The JPEG and PNG files directly in `dir`, sorted by name.
+pub fn images_in(dir: &Path) -> Result<Vec<PathBuf>, String> {
+    let rd = std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let mut files: Vec<PathBuf> = rd
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.extension()
+                .and_then(|e| e.to_str())
+                .map(|e| e.to_ascii_lowercase())
+                .is_some_and(|e| matches!(e.as_str(), "jpg" | "jpeg" | "png"))
+        })
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        return Err(format!("{}: no JPEG or PNG frames", dir.display()));
+    }
+    Ok(files)
 }
 
 /// A folder of JPEG or PNG images, sorted by name, decoded to RGB888 one

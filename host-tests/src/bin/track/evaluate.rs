@@ -1,0 +1,262 @@
+//! `track otb` and `track fixture`: sequences tracked one frame at a time
+//! and scored against their ground truth (a sequence's scores are also what
+//! `ablate` reports).
+
+use crate::Common;
+use crate::score::{draw_plots, score_set};
+use crate::shared::{bar, fmt3, pct, peak_memory};
+use host_tests::metrics::{Awareness, has_target, median, score};
+use host_tests::otb;
+use host_tests::runner::{AnyTracker, Method, PARTICLES, Run};
+use host_tests::source::{FixtureStream, FrameSource, fixture_truth};
+use pftrack::{BoundingBox, Estimate, Event, Frame, TrackState};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// One sequence's scores against its truth.
+pub(crate) struct Row {
+    pub(crate) name: String,
+    pub(crate) auc: f64,
+    pub(crate) p20: f64,
+    pub(crate) ms: f64,
+    pub(crate) frames: usize,
+    pub(crate) lost: usize,
+    pub(crate) reacquired: usize,
+    pub(crate) aware: Awareness,
+}
+
+/// The first ground-truth box, if it has a target to start from, changed by
+/// `perturb` if given.
+pub(crate) fn start_box(
+    name: &str,
+    truth: &[BoundingBox],
+    perturb: Option<otb::Perturb>,
+) -> Result<BoundingBox, String> {
+    let init = *truth.first().ok_or_else(|| format!("{name}: no frames"))?;
+    if !has_target(&init) {
+        return Err(format!("{name}: the first ground-truth box has no target to start from"));
+    }
+    Ok(perturb.map_or(init, |p| p.apply(&init)))
+}
+
+/// A run's scores against the truth.
+pub(crate) fn row_of(name: &str, run: &Run, truth: &[BoundingBox]) -> Result<Row, String> {
+    let s = score(&run.boxes, truth).ok_or_else(|| format!("{name}: no frame with a target to score"))?;
+    let count = |ev: Event| run.estimates.iter().filter(|e| e.event == Some(ev)).count();
+    let mut aware = Awareness::default();
+    for ((e, b), t) in run.estimates.iter().zip(run.boxes.iter().skip(1)).zip(truth.iter().skip(1)) {
+        aware.add(b, e.state == TrackState::Tracking, e.confidence, t);
+    }
+    Ok(Row {
+        name: name.to_string(),
+        auc: s.auc,
+        p20: s.precision20,
+        ms: median(&run.step_ms),
+        frames: run.boxes.len(),
+        lost: count(Event::LostTarget),
+        reacquired: count(Event::Reacquired),
+        aware,
+    })
+}
+
+fn print_frames(truth: &[BoundingBox], run: &Run) {
+    println!("appearance threshold: {:.3}", run.threshold);
+    if let Some(t) = run.edge_threshold {
+        println!("edge threshold: {t}");
+    }
+    if let Some(l) = run.colour_levels {
+        println!("colour levels per channel: {l:?} (the first for the whole ellipse; with quadrants, TL TR BL BR)");
+    }
+    println!("{:>5} {:>9} {:>11} {:>5} {:>4} {:>27} {:>27}", "frame", "state", "event", "conf", "app", "box", "truth");
+    for (i, e) in run.estimates.iter().enumerate() {
+        let b = e.bbox();
+        let t = truth.get(i + 1).copied().unwrap_or_default();
+        println!(
+            "{:>5} {:>9} {:>11} {:>5.3} {:>4} {:>6.1},{:>6.1},{:>6.1},{:>6.1} {:>6.1},{:>6.1},{:>6.1},{:>6.1}",
+            i + 2,
+            format!("{:?}", e.state),
+            e.event.map(|v| format!("{v:?}")).unwrap_or_default(),
+            e.confidence,
+            e.appearing,
+            b.x,
+            b.y,
+            b.width,
+            b.height,
+            t.x,
+            t.y,
+            t.width,
+            t.height
+        );
+    }
+}
+
+/// A sequence opened for streaming: its name, its frames, and its truth
+/// (read whole from an OTB folder; a fixture's comes with each frame).
+struct Opened {
+    name: String,
+    frames: Box<dyn FrameSource>,
+    truth: Vec<BoundingBox>,
+}
+
+fn open_sequence(path: &Path) -> Result<Opened, String> {
+    if path.is_file() {
+        let name = path.file_stem().and_then(|s| s.to_str()).unwrap_or("fixture").to_string();
+        let reader = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let frames = FixtureStream::new(Box::new(reader)).map_err(|e| format!("{}: {e}", path.display()))?;
+        return Ok(Opened { name, frames: Box::new(frames), truth: fixture_truth(path)? });
+    }
+    if !path.is_dir() {
+        return Err(format!("{}: no such file or folder", path.display()));
+    }
+    let s = otb::open(path)?;
+    Ok(Opened { name: s.name, frames: Box::new(s.frames), truth: s.truth })
+}
+
+/// Tracks one sequence as it streams past, one frame in memory at a time,
+/// writes its track (and with `--gif` its pictures), and scores it.
+fn run_one(path: &Path, common: &Common) -> Result<(Row, Vec<BoundingBox>, Vec<BoundingBox>), String> {
+    use host_tests::picture::GifFrames;
+    let Opened { name, mut frames, truth } = open_sequence(path)?;
+    let n = frames.frame_count().unwrap_or(0);
+    let pb = bar(n, "track");
+    pb.set_prefix(name.clone());
+    let mut gif = common.gif.then(|| GifFrames::new(frames.size().0, Some(n)));
+    let mut picture = |i: usize, f: &Frame<'_>, est: Option<&Estimate>, parts: &[(f32, f32)]| {
+        if let Some(g) = gif.as_mut().filter(|g| g.wants(i)) {
+            let px = (f.width(), f.height(), host_tests::scene::to_rgb(f));
+            g.push(i, px, est, truth.get(i).filter(|t| has_target(t)), parts);
+        }
+    };
+    let first = frames.next_frame().map_err(|e| format!("{name}: {e}"))?.ok_or_else(|| format!("{name}: no frames"))?;
+    let init = start_box(&name, &truth, common.perturb)?;
+    let (mut tracker, _) = AnyTracker::start(common.tracker, common.config, common.seed, &first, init)
+        .map_err(|e| format!("{name}: {e}"))?;
+    picture(0, &first, None, &[]);
+    let mut run = Run::new(init, &tracker);
+    let mut i = 1;
+    while let Some(f) = frames.next_frame().map_err(|e| format!("{name}: {e}"))? {
+        let est = run.step(&mut tracker, &f).map_err(|e| format!("{name}: frame {}: {e}", i + 1))?;
+        picture(i, &f, Some(&est), run.particles.last().map_or(&[], Vec::as_slice));
+        i += 1;
+        pb.set_position(i as u64);
+    }
+    pb.finish_and_clear();
+    let row = row_of(&name, &run, &truth)?;
+    if common.frames {
+        print_frames(&truth, &run);
+    }
+    if let Some(g) = &gif {
+        let (animation, still) = (format!("{name}.gif"), format!("{name}.png"));
+        g.write(&common.out_dir.join(animation), Some(&common.out_dir.join(still)), 66)?;
+    }
+    if let Some(path) = &common.dump {
+        use std::io::Write;
+        let mut f = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(path)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        let mut text = String::new();
+        for (i, ((e, d), b)) in run.estimates.iter().zip(&run.diagnostics).zip(run.boxes.iter().skip(1)).enumerate() {
+            let Some(t) = truth.get(i + 1).filter(|t| has_target(t)) else { continue };
+            text += &format!(
+                "{},{},{:.4},{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}\n",
+                name,
+                i + 2,
+                b.iou(t),
+                (e.state == TrackState::Tracking) as u8,
+                e.confidence,
+                d.contrast,
+                d.correlation,
+                d.anchored,
+                d.similarity,
+                d.psr,
+            );
+        }
+        f.write_all(text.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    let out = common.out_dir.join(format!("{}.txt", name));
+    let text: String =
+        run.boxes.iter().map(|b| format!("{:.2},{:.2},{:.2},{:.2}\n", b.x, b.y, b.width, b.height)).collect();
+    std::fs::write(&out, text).map_err(|e| format!("{}: {e}", out.display()))?;
+    let ms = common.out_dir.join(format!("{}.ms", name));
+    std::fs::write(&ms, format!("{:.4}\n", row.ms)).map_err(|e| format!("{}: {e}", ms.display()))?;
+    Ok((row, run.boxes, truth))
+}
+
+/// One line on how well the estimates' states and confidences tell good
+/// frames from missing ones.
+fn describe(a: &Awareness) -> String {
+    let total = a.samples.len().max(1) as f64;
+    format!(
+        "missing frames (IoU < 0.1): {:.1}%, of which reported not tracking {}; good frames (IoU >= 0.3) reported not tracking {}; confidence ROC AUC (missing vs the rest) {}",
+        100.0 * a.missing as f64 / total,
+        pct(a.missing_reported()),
+        pct(a.good_reported_lost()),
+        fmt3(a.roc_auc())
+    )
+}
+
+/// `track otb` and `track fixture`: every sequence tracked as it streams
+/// past, its track written, and one table of scores printed.
+pub(crate) fn command(paths: &[PathBuf], common: &Common) -> ExitCode {
+    if let Err(e) = std::fs::create_dir_all(&common.out_dir) {
+        eprintln!("error: {}: {e}", common.out_dir.display());
+        return ExitCode::FAILURE;
+    }
+    let settings = if common.set.is_empty() { "default config".to_string() } else { common.set.join(" ") };
+    match common.tracker {
+        Method::Pf => println!("pftrack, {PARTICLES} particles, seed {}, {settings}", common.seed),
+        m => println!("{} (default configuration)", m.label()),
+    }
+    println!(
+        "{:<22} {:>6} {:>6} {:>6} {:>9} {:>5} {:>6}",
+        "sequence", "frames", "AUC", "P20", "ms/frame", "lost", "found"
+    );
+    let mut rows = Vec::new();
+    let mut scored = Vec::new();
+    let mut failed = false;
+    for p in paths {
+        match run_one(p, common) {
+            Ok((r, boxes, truth)) => {
+                scored.push((boxes, truth));
+                println!(
+                    "{:<22} {:>6} {:>6.3} {:>6.3} {:>9.3} {:>5} {:>6}",
+                    r.name, r.frames, r.auc, r.p20, r.ms, r.lost, r.reacquired
+                );
+                rows.push(r);
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                failed = true;
+            }
+        }
+    }
+    if rows.len() > 1 {
+        let n = rows.len() as f64;
+        println!(
+            "{:<22} {:>6} {:>6.3} {:>6.3} {:>9.3}",
+            "mean",
+            rows.iter().map(|r| r.frames).sum::<usize>(),
+            rows.iter().map(|r| r.auc).sum::<f64>() / n,
+            rows.iter().map(|r| r.p20).sum::<f64>() / n,
+            rows.iter().map(|r| r.ms).sum::<f64>() / n,
+        );
+    }
+    if !rows.is_empty() {
+        let mut pooled = Awareness::default();
+        rows.iter().for_each(|r| pooled.merge(&r.aware));
+        println!("{}", describe(&pooled));
+    }
+    println!("tracks written to {}; peak memory {}", common.out_dir.display(), peak_memory());
+    if common.plots && !scored.is_empty() {
+        let ms = (!rows.is_empty()).then(|| rows.iter().map(|r| r.ms).sum::<f64>() / rows.len() as f64);
+        let drawn = score_set(common.tracker.label(), &scored, ms)
+            .and_then(|set| draw_plots(&[set], &common.out_dir, &format!("{} sequences", scored.len())));
+        if let Err(e) = drawn {
+            eprintln!("error: {e}");
+            failed = true;
+        }
+    }
+    if failed { ExitCode::FAILURE } else { ExitCode::SUCCESS }
+}

@@ -1,0 +1,180 @@
+//! `track score`: result sets scored against ground truth, as one table and
+//! the success and precision plots (which `otb` and `fixture` draw too).
+
+use crate::shared::{Split, fmt3};
+use host_tests::metrics::{breakdown, score};
+use host_tests::otb;
+use pftrack::BoundingBox;
+use std::path::{Path, PathBuf};
+
+/// One result set's curves and mean scores over its sequences.
+pub(crate) struct SetScore {
+    name: String,
+    success: Vec<f64>,
+    precision: Vec<f64>,
+    auc: f64,
+    p20: f64,
+    ms: Option<f64>,
+}
+
+/// Scores the boxes of each sequence against its truth, averaging curves
+/// and scores over sequences (the tables' convention: mean of per-sequence AUC).
+pub(crate) fn score_set(
+    name: &str,
+    runs: &[(Vec<BoundingBox>, Vec<BoundingBox>)],
+    ms: Option<f64>,
+) -> Result<SetScore, String> {
+    use host_tests::metrics::{PRECISION_THRESHOLDS, SUCCESS_THRESHOLDS, precision_curve, success_curve};
+    let mut success = vec![0.0; SUCCESS_THRESHOLDS];
+    let mut precision = vec![0.0; PRECISION_THRESHOLDS];
+    let mut n = 0.0;
+    for (boxes, truth) in runs {
+        let (Some(s), Some(p)) = (success_curve(boxes, truth), precision_curve(boxes, truth)) else { continue };
+        success.iter_mut().zip(&s).for_each(|(a, b)| *a += b);
+        precision.iter_mut().zip(&p).for_each(|(a, b)| *a += b);
+        n += 1.0;
+    }
+    if n == 0.0 {
+        return Err(format!("{name}: no sequence could be scored"));
+    }
+    success.iter_mut().chain(precision.iter_mut()).for_each(|v| *v /= n);
+    let auc = success.iter().sum::<f64>() / success.len() as f64;
+    let p20 = precision.get(20).copied().unwrap_or(0.0);
+    Ok(SetScore { name: name.to_string(), success, precision, auc, p20, ms })
+}
+
+pub(crate) fn draw_plots(sets: &[SetScore], dir: &Path, what: &str) -> Result<(), String> {
+    use host_tests::plot::{Curve, line_plot};
+    let xs_s: Vec<f64> = (0..host_tests::metrics::SUCCESS_THRESHOLDS).map(|i| i as f64 * 0.05).collect();
+    let xs_p: Vec<f64> = (0..host_tests::metrics::PRECISION_THRESHOLDS).map(|i| i as f64).collect();
+    let s: Vec<Curve> =
+        sets.iter().map(|r| Curve { name: r.name.clone(), ys: r.success.clone(), score: r.auc }).collect();
+    let p: Vec<Curve> =
+        sets.iter().map(|r| Curve { name: r.name.clone(), ys: r.precision.clone(), score: r.p20 }).collect();
+    line_plot(
+        &dir.join("success.png"),
+        &format!("Success plots of OPE - {what}"),
+        "Overlap threshold",
+        "Success rate",
+        &xs_s,
+        &s,
+        "AUC",
+    )?;
+    line_plot(
+        &dir.join("precision.png"),
+        &format!("Precision plots of OPE - {what}"),
+        "Location error threshold (px)",
+        "Precision",
+        &xs_p,
+        &p,
+        "P20",
+    )?;
+    println!("plots written to {} and {}", dir.join("success.png").display(), dir.join("precision.png").display());
+    Ok(())
+}
+
+/// Reads a track file (x,y,w,h per line; commas, tabs or spaces).
+fn read_boxes(path: &Path) -> Result<Vec<BoundingBox>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    otb::parse_groundtruth(&text).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+pub(crate) fn command(
+    truth: &[PathBuf],
+    results: &[String],
+    plots: &Path,
+    split: Option<&Split>,
+) -> Result<(), String> {
+    let truths: Vec<(String, Vec<BoundingBox>)> = truth
+        .iter()
+        .map(|dir| {
+            let name = dir.file_name().and_then(|n| n.to_str()).unwrap_or("").to_string();
+            read_boxes(&dir.join("groundtruth.txt")).map(|t| (name, t))
+        })
+        .collect::<Result<_, _>>()?;
+    // Per set: its curves, and each sequence's AUC averaged over the set's runs.
+    let mut sets = Vec::new();
+    for spec in results {
+        let (name, folders) = match spec.split_once('=') {
+            Some((n, f)) => (n.to_string(), f.split(',').map(PathBuf::from).collect::<Vec<_>>()),
+            None => {
+                let f = PathBuf::from(spec);
+                (f.file_name().and_then(|n| n.to_str()).unwrap_or(spec).to_string(), vec![f])
+            }
+        };
+        let mut runs = Vec::new();
+        let mut ms = Vec::new();
+        let mut per_seq = vec![0.0; truths.len()];
+        // Means over sequences of the breakdown's two AUCs.
+        let mut breakdowns = (0.0, 0.0);
+        for folder in &folders {
+            for ((seq, t), acc) in truths.iter().zip(per_seq.iter_mut()) {
+                let boxes = read_boxes(&folder.join(format!("{seq}.txt")))?;
+                if boxes.len() != t.len() {
+                    return Err(format!("{name}: {seq} has {} boxes for {} frames", boxes.len(), t.len()));
+                }
+                if let Ok(v) = std::fs::read_to_string(folder.join(format!("{seq}.ms")))
+                    && let Ok(v) = v.trim().parse::<f64>()
+                {
+                    ms.push(v);
+                }
+                *acc += score(&boxes, t).map_or(0.0, |s| s.auc) / folders.len() as f64;
+                if let Some(b) = breakdown(&boxes, t) {
+                    let n = (folders.len() * truths.len()) as f64;
+                    (breakdowns.0, breakdowns.1) = (breakdowns.0 + b.true_size / n, breakdowns.1 + b.true_centre / n);
+                }
+                runs.push((boxes, t.clone()));
+            }
+        }
+        let ms = (ms.len() == runs.len()).then(|| ms.iter().sum::<f64>() / ms.len() as f64);
+        sets.push((score_set(&name, &runs, ms)?, per_seq, breakdowns));
+    }
+    let seqs: Vec<&str> = truths.iter().map(|(n, _)| n.as_str()).collect();
+    println!("{} sequences: {}", seqs.len(), seqs.join(", "));
+    println!();
+    let mean_of = |per_seq: &[f64], names: &[String]| {
+        let v: Vec<f64> =
+            seqs.iter().zip(per_seq).filter(|(n, _)| names.iter().any(|m| m == *n)).map(|(_, &a)| a).collect();
+        fmt3((!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64))
+    };
+    match split {
+        Some(_) => {
+            println!("| tracker | tune AUC | check AUC | mean AUC | mean P20 | ms/frame |");
+            println!("|---|---|---|---|---|---|");
+        }
+        None => {
+            println!("| tracker | mean AUC | mean P20 | ms/frame |");
+            println!("|---|---|---|---|");
+        }
+    }
+    let mut order: Vec<&(SetScore, Vec<f64>, (f64, f64))> = sets.iter().collect();
+    order.sort_by(|a, b| b.0.auc.total_cmp(&a.0.auc));
+    for (r, per_seq, _) in order.iter().copied() {
+        let ms = r.ms.map(|m| format!("{m:.3}")).unwrap_or_else(|| "-".to_string());
+        match split {
+            Some(sp) => println!(
+                "| {} | {} | {} | {:.3} | {:.3} | {ms} |",
+                r.name,
+                mean_of(per_seq, &sp.tune),
+                mean_of(per_seq, &sp.check),
+                r.auc,
+                r.p20
+            ),
+            None => println!("| {} | {:.3} | {:.3} | {ms} |", r.name, r.auc, r.p20),
+        }
+    }
+    println!();
+    println!(
+        "Where the overlap is lost (mean AUC over sequences, each box given the truth's size about its own centre, or moved to the truth's centre at its own size):"
+    );
+    println!();
+    println!("| tracker | mean AUC | with the truth's size | with the truth's centre |");
+    println!("|---|---|---|---|");
+    for (r, per_seq, (size, centre)) in order {
+        let auc = per_seq.iter().sum::<f64>() / per_seq.len().max(1) as f64;
+        println!("| {} | {auc:.3} | {size:.3} ({:+.3}) | {centre:.3} ({:+.3}) |", r.name, size - auc, centre - auc);
+    }
+    std::fs::create_dir_all(plots).map_err(|e| format!("{}: {e}", plots.display()))?;
+    let sets: Vec<SetScore> = sets.into_iter().map(|(s, _, _)| s).collect();
+    draw_plots(&sets, plots, &format!("{} sequences", seqs.len()))
+}

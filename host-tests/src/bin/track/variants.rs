@@ -1,0 +1,88 @@
+//! The variants `track ablate` runs.
+
+use host_tests::runner::Method;
+
+/// The ablation study: each variant changes the defaults (the best
+/// combination found) in one respect, except the first, which is the first
+/// paper's filter as written. The `--set`s of the command line apply on top.
+pub(crate) const VARIANTS: &[(&str, &[&str])] = &[
+    ("defaults (best combination)", &[]),
+    (
+        "paper 1 as written",
+        &[
+            "sampling=full",
+            "max_samples=0",
+            "edges=off",
+            "sigma=0.2",
+            "eps=0",
+            "position_noise=0.1",
+            "velocity_noise=0.05",
+            "velocity_decay=1",
+            "speed_noise=0",
+            "update_sigma=0.2",
+            "life=appearance",
+            "size=off",
+            "shift=off",
+            "background_weight=off",
+        ],
+    ),
+    ("life: the appearance test (paper 1)", &["life=appearance"]),
+    ("life: confidence, lost below 0.5, found above 0.6", &["life=confidence:0.5:0.6"]),
+    ("life: confidence, lost below 0.7, found above 0.8", &["life=confidence:0.7:0.8"]),
+    ("life: confidence, lost below 0.8, found above 0.85", &["life=confidence:0.8:0.85"]),
+    ("life: + re-detection while lost", &["redetect=on"]),
+    ("life: without the surroundings-motion test", &["scene_motion=off"]),
+    ("size: not searched (random walk only)", &["size=off"]),
+    ("size: searched by contrast only", &["size=0.02:0:0.03:0.05"]),
+    ("size: scale only (aspect kept)", &["size=0.02:1:scale:0.05"]),
+    ("size: step 0.05", &["size=0.05:1:0.03:0.05"]),
+    ("size: no pull towards the first box", &["size=0.02:1:0:0"]),
+    ("size: pull on the area only", &["size=0.02:1:0:0.05"]),
+    ("size: pulls 0.03 on aspect and area", &["size=0.02:1:0.03:0.03"]),
+    ("position: not refined (filter mean)", &["shift=off"]),
+    ("position: refined without the template", &["shift=0.05:1:3:0"]),
+    ("position: template weight 0.3", &["shift=0.05:1:3:0.3"]),
+    ("position: refined by contrast only", &["shift=0.05:1:0:0"]),
+    ("position: up to 3 steps", &["shift=0.05:3:3:0.15"]),
+    ("surroundings: adapt at 0.02", &["surroundings_rate=0.02"]),
+    ("colour: model not background-weighted", &["background_weight=off"]),
+    ("colour: not background-weighted, life 0.5 / 0.6", &["background_weight=off", "life=confidence:0.5:0.6"]),
+    ("colour: half background-weighted, every colour", &["background_weight=0.5"]),
+    ("colour: fully background-weighted model (CBWH)", &["background_weight=1"]),
+    ("cues: + grey template, share 0.3", &["template=0.3:0.05"]),
+    ("cues: without the correlation filter (colour alone)", &["correlation=off"]),
+    ("likelihood: adaptive σ, floor 0.02", &["adaptive_sigma=0.02:0.5"]),
+    ("likelihood: σ from spread, 4 e-folds", &["spread_sigma=4:0.005:0.5"]),
+    ("likelihood: fixed σ 0.2, no ε", &["sigma=0.2", "eps=0"]),
+    ("sampling: 1000 samples per region", &["max_samples=1000"]),
+    ("sampling: all pixels", &["sampling=full"]),
+    ("sampling: quarter", &["sampling=quarter"]),
+    ("sampling: checkerboard, no budget", &["max_samples=0"]),
+    ("cues: colour only", &["edges=off"]),
+    ("cues: edges threshold 50", &["edges=8:50"]),
+    ("cues: edges threshold fixed, not lowered for a soft target", &["strong_percent=0"]),
+    ("cues: edges with a flat bin", &["edges=8:100:flat"]),
+    ("cues: weighted 0.5 instead of product", &["combination=weighted:0.5"]),
+    ("colour: HSV 8x8x4", &["binning=hsv8x8x4"]),
+    ("colour: RGB 4x4x4", &["binning=rgb4x4x4"]),
+    ("colour: adaptive bins (Birgé–Rozenholc)", &["binning=adaptive"]),
+    ("spatial: quadrants, RGB 4x4x4", &["quadrants=on", "binning=rgb4x4x4"]),
+    (
+        "dynamics: constant velocity, paper noise",
+        &["velocity_decay=1", "velocity_noise=0.05", "position_noise=0.1", "speed_noise=0"],
+    ),
+    ("dynamics: position noise from the size alone", &["speed_noise=0"]),
+    ("dynamics: speed noise 1.5", &["speed_noise=1.5"]),
+    ("model: update gate σ 0.2 (paper 1)", &["update_sigma=0.2"]),
+    ("model: never updated", &["alpha=0"]),
+    ("model: update only when degraded (T = 0.9 ρ₀, 10 frames)", &["model_update=degraded:0.9:10"]),
+    ("resampling: multinomial", &["resampling=multinomial"]),
+    ("similarity: histogram intersection", &["similarity=intersection"]),
+    ("likelihood: exponential exp(-d/σ)", &["shape=exponential"]),
+    ("likelihood table, spacing 2 (fixed size)", &["table=2"]),
+    ("cues: + ellipse-boundary gradient, share 0.3", &["boundary=0.3"]),
+];
+
+/// Variants that swap the particle filter for another tracker.
+pub(crate) const OTHER_TRACKERS: &[(&str, Method)] =
+    &[("baseline: mean shift (±5% scale)", Method::Meanshift), ("baseline: Kalman mean shift", Method::Kalman)];
