@@ -20,7 +20,7 @@ use crate::config::MAX_EDGE_BINS;
 use crate::edges::{EdgeMap, NIBBLE_NONE};
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
-use crate::pixel::{self, PixelRead, RowReader};
+use crate::pixel::{self, PixelRead};
 use crate::region::{Lattice, Sampling};
 
 pub use model::{Model, SUPPORT_WORDS, Similarity, bhattacharyya_distance};
@@ -209,11 +209,7 @@ impl<const K: usize> Histogram<K> {
         // pixels through the general accessor: a loop per layout and format
         // would cost more flash than a small target can spare.
         let walk = RegionWalk { hist: self, frame, e, layout, lattice, map, edge };
-        if per_format && layout.is_fast() {
-            pixel::read(frame.format(), walk)
-        } else {
-            walk.general()
-        }
+        pixel::read_if(per_format && layout.is_fast(), frame.format(), walk);
         // 4-bit maps drop the weight of cells with no bin into the nibble
         // form's "none" bin, which no orientation uses (see `take`).
         if map.is_some_and(|m| m.nibbles())

@@ -460,10 +460,7 @@ pub(crate) fn row_bins<F: FnMut(usize, usize)>(
 ) {
     let Some(row) = frame.row(y) else { return };
     let step = step.max(1);
-    if !layout.is_fast() {
-        return general_bins(frame, layout, y, (x0, step, n), visit);
-    }
-    pixel::read(frame.format(), RowBins { frame, layout, row, y, at: (x0, step, n), visit })
+    pixel::read_if(layout.is_fast(), frame.format(), RowBins { frame, layout, row, y, at: (x0, step, n), visit })
 }
 
 /// [`row_bins`]' arguments, read by a loop per format or the general one.
@@ -536,22 +533,23 @@ pub(crate) fn for_each_bin<F: FnMut(usize, usize, usize)>(
     lattice: Lattice,
     visit: F,
 ) {
-    // Chosen once per region, not per pixel: RGB565 camera frames with the
-    // default binning read bins straight from the packed bits.
-    let walk = BinWalk { frame, e, binning, lattice, visit };
-    if binning == Binning::Rgb8x8x8 { pixel::read(frame.format(), walk) } else { walk.general() }
+    // RGB565 camera frames with the default binning read bins straight
+    // from the packed bits: a format dispatch per row, not per pixel.
+    let (packed, format, mut visit) = (binning == Binning::Rgb8x8x8, frame.format(), visit);
+    for_each_row(frame, e, lattice, |span| {
+        pixel::read_if(packed, format, SpanBins { frame, span, binning, visit: &mut visit })
+    });
 }
 
-/// [`for_each_bin`]'s arguments, read by a loop per format or the general one.
-pub(super) struct BinWalk<'f, 'r, F> {
+/// One row of [`for_each_bin`], read by a loop per format or the general one.
+pub(super) struct SpanBins<'f, 'r, F> {
     pub(super) frame: &'r Frame<'f>,
-    pub(super) e: &'r Ellipse,
+    pub(super) span: RowSpan<'f>,
     pub(super) binning: Binning,
-    pub(super) lattice: Lattice,
-    pub(super) visit: F,
+    pub(super) visit: &'r mut F,
 }
 
-impl<F: FnMut(usize, usize, usize)> RowReader for BinWalk<'_, '_, F> {
+impl<F: FnMut(usize, usize, usize)> RowReader for SpanBins<'_, '_, F> {
     type Output = ();
     // Mean shift's walk on RGB565 camera frames; the rest read through the
     // general accessor.
@@ -566,27 +564,23 @@ impl<F: FnMut(usize, usize, usize)> RowReader for BinWalk<'_, '_, F> {
     /// Bins of the default binning straight from the pixels.
     #[inline(always)]
     fn rows_of<P: PixelRead>(self) {
-        let BinWalk { frame, e, lattice, mut visit, .. } = self;
-        for_each_row(frame, e, lattice, |span| {
-            let (y, row) = (span.y, span.row);
-            for (x, _) in span {
-                if let Some(bin) = P::rgb_8x8x8(row, x) {
-                    visit(x, y, bin);
-                }
+        let SpanBins { span, visit, .. } = self;
+        let (y, row) = (span.y, span.row);
+        for (x, _) in span {
+            if let Some(bin) = P::rgb_8x8x8(row, x) {
+                visit(x, y, bin);
             }
-        });
+        }
     }
 
     #[inline(always)]
     fn general(self) {
-        let BinWalk { frame, e, binning, lattice, mut visit } = self;
-        for_each_row(frame, e, lattice, |span| {
-            let y = span.y;
-            for (x, _) in span {
-                if let Some(rgb) = frame.rgb(x, y) {
-                    visit(x, y, binning.bin(rgb));
-                }
+        let SpanBins { frame, span, binning, visit } = self;
+        let y = span.y;
+        for (x, _) in span {
+            if let Some(rgb) = frame.rgb(x, y) {
+                visit(x, y, binning.bin(rgb));
             }
-        });
+        }
     }
 }
