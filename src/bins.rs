@@ -14,6 +14,8 @@
 //! nothing is allocated.
 
 use crate::colour::{ADAPTIVE_LEVELS, levels_bin};
+use crate::cue::not_built;
+use crate::error::ConfigError;
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
 use crate::histogram::Histogram;
@@ -47,6 +49,30 @@ pub fn birge_rozenholc(counts: &[u32]) -> Real {
     }
     let lk = ln(kf);
     sum - (kf - 1.0 + lk * lk * sqrt(lk))
+}
+
+/// Asking for adaptive bins in a build without them is an error that names
+/// the feature.
+pub(crate) fn validate(binning: crate::Binning) -> Result<(), ConfigError> {
+    if binning == crate::Binning::Adaptive && !cfg!(feature = "adaptive-bins") {
+        return Err(not_built("binning", "adaptive-bins"));
+    }
+    Ok(())
+}
+
+/// The levels per channel of each segment under `binning`: chosen by
+/// [`choose_levels`] for [`crate::Binning::Adaptive`] in a build with the
+/// `adaptive-bins` feature, `None` (the layout's own) otherwise.
+pub(crate) fn levels<const K: usize>(
+    binning: crate::Binning,
+    hist: &mut Histogram<K>,
+    frame: &Frame<'_>,
+    e: &Ellipse,
+    lattice: Lattice,
+    segments: u8,
+) -> Option<[u8; 4]> {
+    (cfg!(feature = "adaptive-bins") && binning == crate::Binning::Adaptive)
+        .then(|| choose_levels(hist, frame, e, lattice, segments))
 }
 
 /// Levels per channel for each of `segments` (1 or 4) blocks of a `K`-bin

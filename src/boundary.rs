@@ -8,14 +8,50 @@
 //! normal and `∇I` the Sobel gradient of luma (Birchfield's head tracker, as
 //! the paper uses it). The tracker normalises it by the best particle's
 //! score in each frame, the paper's normalised score, and mixes it with the
-//! colour similarity (see [`crate::config::BoundaryCue`]).
+//! colour similarity (see [`BoundaryCue`]).
 
+use crate::cue::not_built;
 use crate::edges::sobel;
+use crate::error::{ConfigError, check};
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
 use crate::pixel::luma;
 use crate::region::floor;
 use crate::scalar::{Real, sqrt};
+
+/// The ellipse-boundary gradient cue: each particle's mean normal gradient
+/// along its outline (`boundary::outline_gradient`, built with the `boundary` feature) divided by the
+/// best particle's in the frame, mixed with the histogram similarity `s` as
+/// `(1 − weight) · s + weight · g`: the head-tracking paper's sum of
+/// normalised scores, weighted.
+#[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BoundaryCue {
+    /// Share of the boundary score, in `[0, 1]` (the paper's plain sum is 0.5).
+    pub weight: Real,
+}
+
+/// Checks the settings; asking for the cue in a build without it is an
+/// error that names the feature.
+pub(crate) fn validate(settings: Option<BoundaryCue>) -> Result<(), ConfigError> {
+    let Some(b) = settings else { return Ok(()) };
+    if !cfg!(feature = "boundary") {
+        return Err(not_built("boundary", "boundary"));
+    }
+    check("boundary.weight", b.weight, 0.0, 1.0)
+}
+
+/// Whether the cue is on: asked for in `settings`, and built (the
+/// `boundary` feature).
+pub(crate) const fn on(settings: Option<BoundaryCue>) -> bool {
+    cfg!(feature = "boundary") && settings.is_some()
+}
+
+/// The boundary score of `e`, in 1/16 Sobel units (0 in a build without
+/// the cue).
+pub(crate) fn score(frame: &Frame<'_>, e: &Ellipse) -> u16 {
+    if cfg!(feature = "boundary") { (outline_gradient(frame, e) * 16.0).min(u16::MAX as Real) as u16 } else { 0 }
+}
 
 /// Points sampled on each outline.
 pub const OUTLINE_POINTS: usize = 16;

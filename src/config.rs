@@ -1,7 +1,9 @@
 //! The tracker's configuration and its validation.
 
+use crate::boundary::BoundaryCue;
 use crate::colour::Binning;
-use crate::error::{ConfigError, ParamProblem};
+use crate::correlation::CorrelationCue;
+use crate::error::{ConfigError, ParamProblem, check, positive};
 use crate::filter::{Dynamics, Resampling};
 use crate::histogram::Similarity;
 use crate::likelihood::{Combination, Likelihood, Shape, Sigma};
@@ -160,86 +162,6 @@ pub enum Life {
     },
 }
 
-/// A correlation filter (MOSSE) on the grey levels of a window around the
-/// target, learnt as a running mean and answered by the peak of its
-/// response: each frame, before the size and position searches, the
-/// filter's mean state moves `pull` of the way to the peak. A second cue
-/// beside colour that sees texture, as Staple pairs a correlation filter
-/// with a colour score (Bertinetto et al. 2016). Built with the
-/// `correlation` Cargo feature, a default one (1.5 KB of RAM in every
-/// tracker built with it, and 1.2 KB more stack while it reads a window),
-/// and on in [`Config::default`] where built. Turning it off (`None`)
-/// halves the instructions per frame on a core without an FPU, where its
-/// FFTs run in software; asking for it without the feature is a
-/// configuration error.
-///
-/// ```
-/// use pftrack::{Config, ConfigError, CorrelationCue, Error, ParamProblem, Tracker};
-///
-/// // Off: the colour cues alone.
-/// let lean = Config { correlation: None, ..Config::default() };
-/// assert!(Tracker::<100>::new(lean, 1).is_ok());
-/// let config = Config { correlation: Some(CorrelationCue::MEASURED), ..Config::default() };
-/// match Tracker::<100>::new(config, 1) {
-///     Ok(tracker) => assert_eq!(tracker.config().correlation, Some(CorrelationCue::MEASURED)),
-///     // A build without the `correlation` feature names it.
-///     Err(e) => assert_eq!(
-///         e,
-///         Error::Config(ConfigError {
-///             field: "correlation",
-///             problem: ParamProblem::NotBuilt { feature: "correlation" }
-///         })
-///     ),
-/// }
-/// ```
-#[derive(Copy, Clone, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct CorrelationCue {
-    /// The window's side as a multiple of the box's, in `[1, 4]`: the
-    /// surroundings it takes in are what the filter can also lock on, and
-    /// how far the target may move in a frame and still be in it.
-    pub padding: Real,
-    /// Learning rate `η` of the filter's running mean, in `(0, 1]`.
-    pub rate: Real,
-    /// Frames whose confidence exceeds this, in `[0, 1]`, teach the filter.
-    pub learn_above: Real,
-    /// The share of the way to the response's peak the estimate moves, in
-    /// `[0, 1]`.
-    pub pull: Real,
-    /// Relative size step of the scale search, in `[0, 0.2]`: the windows
-    /// one step larger and smaller are correlated too, and the estimate's
-    /// size moves towards the one whose response peaks highest (the scale
-    /// search of DSST, Danelljan et al. 2014, with three scales). 0 leaves
-    /// the size to the size search.
-    pub scale_step: Real,
-    /// The share of the way to the best scale the size moves, in `[0, 1]`.
-    pub scale_pull: Real,
-    /// The response's peak-to-sidelobe ratio below which the filter moves
-    /// neither the estimate nor its size, in `[0, 20]`: a window with no
-    /// clear match (MOSSE's own test of a failing filter; about 3 on a
-    /// texture the filter never saw). On a target with no texture of its
-    /// own the window's texture is the background's, and a filter that
-    /// followed it would hold the box to the background.
-    pub min_psr: Real,
-}
-
-impl CorrelationCue {
-    /// The settings chosen on the real sequences' tune split
-    /// (docs/accuracy.md): a window twice the box, learnt at 0.05 on every
-    /// frame whose confidence exceeds 0.7, a move 0.7 of the way to the
-    /// peak, and a size that moves 0.3 of the way to the best of three
-    /// scales 3% apart, when the response's PSR reaches 3.
-    pub const MEASURED: CorrelationCue = CorrelationCue {
-        padding: 2.0,
-        rate: 0.05,
-        learn_above: 0.7,
-        pull: 0.7,
-        scale_step: 0.03,
-        scale_pull: 0.3,
-        min_psr: 3.0,
-    };
-}
-
 /// The grey-level template cue: each particle's normalised cross-correlation
 /// with the template (negative correlations count as 0) is mixed into its
 /// similarity as `(1 − weight) · s + weight · ncc`.
@@ -364,18 +286,6 @@ pub struct TableMode {
     pub spacing: u8,
 }
 
-/// The ellipse-boundary gradient cue: each particle's mean normal gradient
-/// along its outline (`boundary::outline_gradient`, built with the `boundary` feature) divided by the
-/// best particle's in the frame, mixed with the histogram similarity `s` as
-/// `(1 − weight) · s + weight · g`: the head-tracking paper's sum of
-/// normalised scores, weighted.
-#[derive(Copy, Clone, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct BoundaryCue {
-    /// Share of the boundary score, in `[0, 1]` (the paper's plain sum is 0.5).
-    pub weight: Real,
-}
-
 /// Parameters of the edge-orientation cue.
 #[derive(Copy, Clone, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -466,35 +376,15 @@ impl Default for Config {
             min_half_axis: 2.0,
             life: Life::Confidence { lost_below: 0.6, found_above: 0.8 },
             redetect: false,
-            scene_motion: cfg!(feature = "scene-motion"),
+            scene_motion: crate::motion::DEFAULT,
             size: Some(SizeSearch { step: 0.02, similarity: 1.0, aspect: true, aspect_pull: 0.03, scale_pull: 0.05 }),
             shift: Some(ShiftSearch { step: 0.05, rounds: 1, similarity: 3.0, template: 0.15 }),
             surroundings_rate: 0.05,
             background_weight: Some(BackgroundWeight { strength: 0.5, above: 0.8 }),
             template: None,
-            // On wherever it is built: the second cue that lifts accuracy
-            // on new video (docs/accuracy.md). A build without the feature
-            // gets a default that validates.
-            correlation: if cfg!(feature = "correlation") { Some(CorrelationCue::MEASURED) } else { None },
+            correlation: crate::correlation::DEFAULT,
         }
     }
-}
-
-/// `v` must be finite and in `[lo, hi]`; the error names `field`. The one
-/// range check of every configuration in the crate.
-pub(crate) fn check(field: &'static str, v: Real, lo: Real, hi: Real) -> Result<(), ConfigError> {
-    if !v.is_finite() {
-        return Err(ConfigError { field, problem: ParamProblem::NonFinite });
-    }
-    if !(v >= lo && v <= hi) {
-        return Err(ConfigError { field, problem: ParamProblem::OutOfRange });
-    }
-    Ok(())
-}
-
-fn positive(field: &'static str, v: Real, hi: Real) -> Result<(), ConfigError> {
-    check(field, v, 0.0, hi)?;
-    if v > 0.0 { Ok(()) } else { Err(ConfigError { field, problem: ParamProblem::OutOfRange }) }
 }
 
 impl Config {
@@ -559,12 +449,7 @@ impl Config {
                 return Err(ConfigError { field: "table", problem: ParamProblem::OutOfRange });
             }
         }
-        if let Some(b) = self.boundary {
-            if !cfg!(feature = "boundary") {
-                return Err(ConfigError { field: "boundary", problem: ParamProblem::NotBuilt { feature: "boundary" } });
-            }
-            check("boundary.weight", b.weight, 0.0, 1.0)?;
-        }
+        crate::boundary::validate(self.boundary)?;
         let d = &self.dynamics;
         check("dynamics.position_noise", d.position_noise, 0.0, 10.0)?;
         check("dynamics.velocity_noise", d.velocity_noise, 0.0, 10.0)?;
@@ -572,33 +457,10 @@ impl Config {
         check("dynamics.speed_noise", d.speed_noise, 0.0, 10.0)?;
         check("dynamics.scale_noise", d.scale_noise, 0.0, 0.5)?;
         check("dynamics.scale_rate_noise", d.scale_rate_noise, 0.0, 0.1)?;
-        if self.scene_motion && !cfg!(feature = "scene-motion") {
-            return Err(ConfigError {
-                field: "scene_motion",
-                problem: ParamProblem::NotBuilt { feature: "scene-motion" },
-            });
-        }
-        if let Some(c) = self.correlation {
-            if !cfg!(feature = "correlation") {
-                return Err(ConfigError {
-                    field: "correlation",
-                    problem: ParamProblem::NotBuilt { feature: "correlation" },
-                });
-            }
-            check("correlation.padding", c.padding, 1.0, 4.0)?;
-            positive("correlation.rate", c.rate, 1.0)?;
-            check("correlation.learn_above", c.learn_above, 0.0, 1.0)?;
-            check("correlation.pull", c.pull, 0.0, 1.0)?;
-            check("correlation.scale_step", c.scale_step, 0.0, 0.2)?;
-            check("correlation.scale_pull", c.scale_pull, 0.0, 1.0)?;
-            check("correlation.min_psr", c.min_psr, 0.0, 20.0)?;
-        }
-        if self.quadrants && !cfg!(feature = "quadrants") {
-            return Err(ConfigError { field: "quadrants", problem: ParamProblem::NotBuilt { feature: "quadrants" } });
-        }
-        if self.binning == Binning::Adaptive && !cfg!(feature = "adaptive-bins") {
-            return Err(ConfigError { field: "binning", problem: ParamProblem::NotBuilt { feature: "adaptive-bins" } });
-        }
+        crate::motion::validate(self.scene_motion)?;
+        crate::correlation::validate(self.correlation)?;
+        crate::histogram::validate_quadrants(self.quadrants)?;
+        crate::bins::validate(self.binning)?;
         check("alpha", self.alpha, 0.0, 1.0)?;
         if let ModelUpdate::WhenDegraded { factor, frames } = self.model_update {
             check("model_update.factor", factor, 0.0, 1.0)?;

@@ -1,6 +1,7 @@
 //! Typed errors. Nothing in the core panics on bad input: every check that
 //! input can fail returns one of these.
 
+use crate::scalar::Real;
 use core::fmt;
 
 /// Why a buffer could not be viewed as a [`crate::Frame`].
@@ -231,3 +232,21 @@ impl core::error::Error for FrameError {}
 impl core::error::Error for ConfigError {}
 impl core::error::Error for RegionError {}
 impl core::error::Error for Error {}
+
+/// `v` must be finite and in `[lo, hi]`; the error names `field`. The one
+/// range check of every configuration in the crate.
+pub(crate) fn check(field: &'static str, v: Real, lo: Real, hi: Real) -> Result<(), ConfigError> {
+    if !v.is_finite() {
+        return Err(ConfigError { field, problem: ParamProblem::NonFinite });
+    }
+    if !(v >= lo && v <= hi) {
+        return Err(ConfigError { field, problem: ParamProblem::OutOfRange });
+    }
+    Ok(())
+}
+
+/// `v` must be in `(0, hi]` (finite, positive); the error names `field`.
+pub(crate) fn positive(field: &'static str, v: Real, hi: Real) -> Result<(), ConfigError> {
+    check(field, v, 0.0, hi)?;
+    if v > 0.0 { Ok(()) } else { Err(ConfigError { field, problem: ParamProblem::OutOfRange }) }
+}

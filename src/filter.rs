@@ -1,6 +1,7 @@
 //! The particle set: state, constant-velocity dynamics, resampling and the
 //! mean-state estimate.
 
+use crate::frame::Frame;
 use crate::geometry::Ellipse;
 use crate::scalar::{Real, clamp, max, min, normal_from_bits, sqrt, unit_from_bits};
 use rand_core::Rng;
@@ -240,6 +241,41 @@ pub(crate) fn mean_state<const N: usize>(particles: &[Particle; N], weights: &[R
     m.hx = clamp(m.hx, lo.hx, hi.hx);
     m.hy = clamp(m.hy, lo.hy, hi.hy);
     m
+}
+
+/// Moves the estimate and every particle by `(dx, dy)`. Centres stay in the
+/// frame, as the dynamics keep them; the estimate, in the frame, stays
+/// inside the particles' hull.
+pub(crate) fn shift_estimate<const N: usize>(
+    ellipse: &mut Ellipse,
+    particles: &mut [Particle; N],
+    (dx, dy): (Real, Real),
+    frame: &Frame<'_>,
+) {
+    let (w, h) = (frame.width() as Real, frame.height() as Real);
+    // Clamped as the particles are, so that the estimate stays their mean's
+    // image: inside the frame and inside their hull (clamping is monotone).
+    ellipse.cx = crate::scalar::clamp(ellipse.cx + dx, 0.0, w);
+    ellipse.cy = crate::scalar::clamp(ellipse.cy + dy, 0.0, h);
+    for p in particles.iter_mut() {
+        p.x = crate::scalar::clamp(p.x + dx, 0.0, w);
+        p.y = crate::scalar::clamp(p.y + dy, 0.0, h);
+    }
+}
+
+/// Scales the estimate's half axes and every particle's by `(fx, fy)`, so
+/// that the filter goes on from the size found.
+pub(crate) fn scale_estimate<const N: usize>(
+    ellipse: &mut Ellipse,
+    particles: &mut [Particle; N],
+    (fx, fy): (Real, Real),
+) {
+    ellipse.hx *= fx;
+    ellipse.hy *= fy;
+    for p in particles.iter_mut() {
+        p.hx *= fx;
+        p.hy *= fy;
+    }
 }
 
 #[cfg(test)]

@@ -6,8 +6,8 @@
 //! axis); an [`OutputPin`] LED shows whether the target is being tracked.
 //! While the target is lost or searched for, the head holds its position.
 
-use crate::config::check;
 use crate::error::ConfigError;
+use crate::error::check;
 use crate::estimate::{Estimate, TrackState};
 use crate::scalar::{Real, clamp};
 use embedded_hal::digital::OutputPin;

@@ -60,14 +60,12 @@
 //!
 #![cfg_attr(not(test), no_std)]
 
-#[cfg(feature = "adaptive-bins")]
 pub mod bins;
-#[cfg(feature = "boundary")]
 pub mod boundary;
 pub mod colour;
 pub mod config;
-#[cfg(feature = "correlation")]
 pub(crate) mod correlation;
+pub(crate) mod cue;
 pub mod edges;
 pub mod error;
 pub mod estimate;
@@ -79,7 +77,6 @@ pub mod geometry;
 pub mod histogram;
 pub mod likelihood;
 pub mod meanshift;
-#[cfg(feature = "scene-motion")]
 pub(crate) mod motion;
 pub mod pixel;
 pub mod region;
@@ -90,11 +87,13 @@ pub mod template;
 mod testing;
 pub mod tracker;
 
+pub use boundary::BoundaryCue;
 pub use colour::Binning;
 pub use config::{
-    BackgroundWeight, BoundaryCue, Config, CorrelationCue, EDGE_SUPPORT_WORDS, EdgeCue, Life, MAX_EDGE_BINS,
-    ModelUpdate, ShiftSearch, SizeSearch, TableMode, TemplateCue,
+    BackgroundWeight, Config, EDGE_SUPPORT_WORDS, EdgeCue, Life, MAX_EDGE_BINS, ModelUpdate, ShiftSearch, SizeSearch,
+    TableMode, TemplateCue,
 };
+pub use correlation::CorrelationCue;
 pub use edges::{EdgeMap, EdgeParams};
 pub use error::{ChromaPlane, ConfigError, Error, FrameError, ParamProblem, RegionError};
 pub use estimate::{Diagnostics, Estimate, Event, Trace, TrackState};

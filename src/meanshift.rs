@@ -51,7 +51,7 @@
 //! ```
 
 use crate::colour::Binning;
-use crate::config::check;
+use crate::error::check;
 use crate::error::{ConfigError, Error, ParamProblem, RegionError};
 use crate::estimate::{Estimate, Event, TrackState};
 use crate::frame::Frame;

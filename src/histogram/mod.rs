@@ -17,7 +17,9 @@ mod walk;
 
 use crate::colour::{Binning, levels_bin};
 use crate::config::MAX_EDGE_BINS;
+use crate::cue::not_built;
 use crate::edges::{EdgeMap, NIBBLE_NONE};
+use crate::error::ConfigError;
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
 use crate::pixel::{self, PixelRead};
@@ -27,6 +29,21 @@ pub use model::{Model, SUPPORT_WORDS, Similarity, bhattacharyya_distance};
 pub(crate) use model::{PlainModel, Support};
 use walk::*;
 pub(crate) use walk::{for_each_bin, row_bins};
+
+/// Whether the quadrant layout is on: asked for, and built (the
+/// `quadrants` feature).
+pub(crate) const fn quadrants(on: bool) -> bool {
+    cfg!(feature = "quadrants") && on
+}
+
+/// Asking for quadrants in a build without them is an error that names the
+/// feature.
+pub(crate) fn validate_quadrants(on: bool) -> Result<(), ConfigError> {
+    if on && !cfg!(feature = "quadrants") {
+        return Err(not_built("quadrants", "quadrants"));
+    }
+    Ok(())
+}
 
 /// How the bins of a histogram are laid out: the colour binning, whether the
 /// ellipse is split into quadrants (each with its own block of bins), and

@@ -2,6 +2,7 @@
 //! model and explicit searching / tracking / lost states.
 
 mod confidence;
+mod cues;
 mod prior;
 mod scratch;
 mod search;
@@ -10,8 +11,6 @@ mod step;
 mod tests;
 
 use crate::config::{Config, EDGE_SUPPORT_WORDS, Life, MAX_EDGE_BINS, TableMode};
-#[cfg(feature = "correlation")]
-use crate::correlation::CorrelationFilter;
 use crate::edges::EdgeMap;
 use crate::error::{ConfigError, Error, ParamProblem, RegionError};
 use crate::estimate::{Diagnostics, Estimate, TrackState};
@@ -20,12 +19,11 @@ use crate::foreground::{Foreground, ForegroundMap};
 use crate::frame::Frame;
 use crate::geometry::{BoundingBox, Ellipse};
 use crate::histogram::{Clear, Histogram, Layout, Model, PlainModel};
-#[cfg(feature = "scene-motion")]
-use crate::motion::SceneMotion;
 use crate::region::{Extents, Lattice};
 use crate::scalar::{Real, sqrt};
 use crate::table::{Bins, Table};
 pub use confidence::on_target;
+use cues::Cues;
 pub use prior::ScalePrior;
 use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro128PlusPlus;
@@ -88,12 +86,8 @@ pub struct Tracker<
     misses: u16,
     /// The signals behind the last confidence.
     diag: Diagnostics,
-    /// The estimate's motion against its surroundings.
-    #[cfg(feature = "scene-motion")]
-    motion: SceneMotion,
-    /// The correlation filter on the grey levels around the target.
-    #[cfg(feature = "correlation")]
-    correlation: CorrelationFilter,
+    /// The cues with state of their own.
+    cues: Cues,
 }
 
 impl<const N: usize, const K: usize, const E: usize, const T: usize> Tracker<N, K, E, Xoshiro128PlusPlus, T> {
@@ -138,10 +132,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
             state: TrackState::Searching,
             misses: 0,
             diag: Diagnostics::default(),
-            #[cfg(feature = "scene-motion")]
-            motion: SceneMotion::new(),
-            #[cfg(feature = "correlation")]
-            correlation: CorrelationFilter::new(),
+            cues: Cues::new(),
         })
     }
 
@@ -215,9 +206,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         self.weights = [1.0 / N as Real; N];
         self.state = TrackState::Tracking;
         self.misses = 0;
-        #[cfg(feature = "scene-motion")]
-        self.motion.start(frame, &e);
-        self.start_correlation(frame, &e);
+        self.cues.start(&self.config, frame, &e);
         Ok(Estimate::initialised(e, N as u16, self.config.likelihood.sigma_for(0.0)))
     }
 
@@ -235,49 +224,31 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         self.weights = [1.0 / N as Real; N];
         self.state = TrackState::Searching;
         self.misses = 0;
-        #[cfg(feature = "scene-motion")]
-        self.motion.start(frame, &Ellipse::from_box(&bbox));
-        self.start_correlation(frame, &Ellipse::from_box(&bbox));
+        self.cues.start(&self.config, frame, &Ellipse::from_box(&bbox));
         Ok(())
-    }
-
-    /// The correlation filter learns the first box afresh (and forgets any
-    /// earlier target).
-    #[cfg_attr(not(feature = "correlation"), allow(unused_variables, clippy::unused_self))]
-    fn start_correlation(&mut self, frame: &Frame<'_>, e: &Ellipse) {
-        #[cfg(feature = "correlation")]
-        {
-            self.correlation.reset();
-            if let Some(c) = self.config.correlation {
-                self.correlation.learn(frame, e, c.padding, c.rate);
-            }
-        }
     }
 
     /// The models of `bbox` and the background statistics of `frame`.
     /// Learns the target of `bbox` into `self.target`; on an error the
     /// tracker is unchanged. The target is built in place: returned by value,
     /// its models (2 KB at the default K) were copied through the stack
-    /// (measured: 11.6 KB of peak stack in `init` on a Cortex-M4). With the
-    /// correlation filter it stays out of line, so that its locals are gone
-    /// before the filter's working spectrum joins the stack (inlined, they
-    /// shared `init`'s frame: 4,424 B of peak stack against 3,952 B).
-    #[cfg_attr(feature = "correlation", inline(never))]
+    /// (11.6 KB of peak stack in `init` on a Cortex-M4, measured). Out of
+    /// line, so that its locals are gone before a cue's working memory
+    /// (the correlation filter's spectrum) joins the stack.
+    #[inline(never)]
     fn learn(&mut self, frame: &Frame<'_>, bbox: &BoundingBox) -> Result<(), Error> {
         bbox.validate(frame.width(), frame.height())?;
         let Tracker { config: cfg, scratch: sc, target: slot, .. } = self;
         let cfg = &*cfg;
         let (fw, fh) = (frame.width(), frame.height());
         let e = Ellipse::from_box(bbox);
-        let segments = if cfg!(feature = "quadrants") && cfg.quadrants { 4 } else { 1 };
-        #[cfg_attr(not(feature = "adaptive-bins"), allow(unused_mut))]
+        let segments = if crate::histogram::quadrants(cfg.quadrants) { 4 } else { 1 };
         let mut layout = Layout { segments, ..Layout::whole(cfg.binning) };
         let edge_threshold =
             cfg.edges.map_or(0, |c| crate::edges::soft_threshold(frame, &e, c.threshold, c.strong_percent));
         sc.prepare(cfg, frame, Some(cover(&e, fw, fh)), (e.hx, e.hy), edge_threshold);
-        #[cfg(feature = "adaptive-bins")]
-        if cfg.binning == crate::colour::Binning::Adaptive {
-            layout.levels = crate::bins::choose_levels(&mut sc.colour, frame, &e, sc.lattice, segments);
+        if let Some(levels) = crate::bins::levels(cfg.binning, &mut sc.colour, frame, &e, sc.lattice, segments) {
+            layout.levels = levels;
         }
         sc.observe(frame, &e, &layout, cfg.edges.is_some(), Clear::All);
         if !Model::<K>::can_learn(&sc.colour, segments) {

@@ -127,7 +127,7 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
         self.observe(frame, e, &models.layout, models.edge.is_some(), clear);
         let per = models.colour.compare(&self.colour, cfg.similarity);
         let (rho, quads) =
-            if cfg!(feature = "quadrants") && cfg.quadrants { (median4(per), per) } else { (per[0], [0.0; 4]) };
+            if crate::histogram::quadrants(cfg.quadrants) { (median4(per), per) } else { (per[0], [0.0; 4]) };
         let sim = match &models.edge {
             Some(m) => {
                 let [edge, ..] = m.compare(&self.edge, cfg.similarity);
@@ -138,7 +138,7 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
         // Only exact histograms can be compared with a second model.
         let anchored = if keep && cfg.life != Life::Appearance {
             let per = models.anchor.compare(&self.colour, cfg.similarity);
-            if cfg!(feature = "quadrants") && cfg.quadrants { median4(per) } else { per[0] }
+            if crate::histogram::quadrants(cfg.quadrants) { median4(per) } else { per[0] }
         } else {
             rho
         };
@@ -161,17 +161,6 @@ impl<const K: usize, const E: usize> Scratch<K, E> {
         if let (Some(e), Some(rect)) = (cfg.edges, rect) {
             self.map.compute_on(frame, rect, e.bins as usize, edge_threshold, e.flat_bin, self.lattice);
         }
-    }
-}
-
-/// The boundary score of `e`, in 1/16 Sobel units (0 when the cue is not built).
-pub(super) fn boundary_q(frame: &Frame<'_>, e: &Ellipse) -> u16 {
-    #[cfg(feature = "boundary")]
-    return (crate::boundary::outline_gradient(frame, e) * 16.0).min(u16::MAX as Real) as u16;
-    #[cfg(not(feature = "boundary"))]
-    {
-        let _ = (frame, e);
-        0
     }
 }
 

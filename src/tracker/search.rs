@@ -183,41 +183,6 @@ pub(super) fn redetect<const K: usize>(
     best.map(|b| b.map(|(x, y, _)| (x, y)))
 }
 
-/// Moves the estimate and every particle by `(dx, dy)`. Centres stay in the
-/// frame, as the dynamics keep them; the estimate, in the frame, stays
-/// inside the particles' hull.
-pub(super) fn shift_estimate<const N: usize>(
-    ellipse: &mut Ellipse,
-    particles: &mut [Particle; N],
-    (dx, dy): (Real, Real),
-    frame: &Frame<'_>,
-) {
-    let (w, h) = (frame.width() as Real, frame.height() as Real);
-    // Clamped as the particles are, so that the estimate stays their mean's
-    // image: inside the frame and inside their hull (clamping is monotone).
-    ellipse.cx = crate::scalar::clamp(ellipse.cx + dx, 0.0, w);
-    ellipse.cy = crate::scalar::clamp(ellipse.cy + dy, 0.0, h);
-    for p in particles.iter_mut() {
-        p.x = crate::scalar::clamp(p.x + dx, 0.0, w);
-        p.y = crate::scalar::clamp(p.y + dy, 0.0, h);
-    }
-}
-
-/// Scales the estimate's half axes and every particle's by `(fx, fy)`, so
-/// that the filter goes on from the size found.
-pub(super) fn scale_estimate<const N: usize>(
-    ellipse: &mut Ellipse,
-    particles: &mut [Particle; N],
-    (fx, fy): (Real, Real),
-) {
-    ellipse.hx *= fx;
-    ellipse.hy *= fy;
-    for p in particles.iter_mut() {
-        p.hx *= fx;
-        p.hy *= fy;
-    }
-}
-
 /// A particle at rest anywhere in a `width × height` frame.
 pub(super) fn uniform_particle<R: Rng>(rng: &mut R, width: usize, height: usize, hx: Real, hy: Real) -> Particle {
     let x = unit_from_bits(rng.next_u32()) * width as Real;

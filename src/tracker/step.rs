@@ -7,7 +7,7 @@ use super::{ScalePrior, Tracker};
 use crate::config::{Life, ModelUpdate};
 use crate::error::Error;
 use crate::estimate::{Diagnostics, Estimate, Event, TrackState};
-use crate::filter::{Bounds, Particle, mean_state, resample};
+use crate::filter::{Bounds, Particle, mean_state, resample, scale_estimate, shift_estimate};
 use crate::foreground::RING;
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
@@ -51,11 +51,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         let sized = prior.is_some() || (T > 0 && self.config.table.is_some());
         let look = self.estimate(frame, &observed, !sized);
         // Measured on every frame, so that its running means stay current.
-        #[cfg(feature = "scene-motion")]
-        let stuck =
-            self.config.scene_motion && self.motion.update(frame, &look.ellipse, self.state == TrackState::Tracking);
-        #[cfg(not(feature = "scene-motion"))]
-        let stuck = false;
+        let stuck = self.cues.miss(&self.config, frame, &look.ellipse, self.state == TrackState::Tracking);
         let was_tracking = self.state == TrackState::Tracking;
         let event = self.life_cycle(look.found && !stuck);
         self.follow(&look.ellipse, was_tracking);
@@ -159,8 +155,8 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
                 Some(t) => (1.0 - t.weight) * sim + t.weight * target.models.template.correlation(frame, &e).max(0.0),
                 None => sim,
             };
-            if cfg!(feature = "boundary") && cfg.boundary.is_some() {
-                *g = boundary_q(frame, &e);
+            if crate::boundary::on(cfg.boundary) {
+                *g = crate::boundary::score(frame, &e);
                 out.g_best = out.g_best.max(*g);
             }
         }
@@ -199,53 +195,11 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     /// The weighted mean state, sized against the surroundings, and how it
     /// compares with the models.
     pub(super) fn estimate(&mut self, frame: &Frame<'_>, observed: &Observed, search: bool) -> Look {
-        let Tracker {
-            config: cfg,
-            particles,
-            weights,
-            scratch,
-            target,
-            state,
-            diag,
-            #[cfg(feature = "correlation")]
-            correlation,
-            ..
-        } = self;
+        let Tracker { config: cfg, particles, weights, scratch, target, state, diag, cues, .. } = self;
         let mut ellipse = mean_state(particles, weights).ellipse();
-        #[cfg_attr(not(feature = "correlation"), allow(unused_mut))]
-        let mut psr = 0.0;
         // The texture cue first, so that the searches and the confidence
         // measure the box where it leaves it.
-        #[cfg(feature = "correlation")]
-        if let Some(c) = cfg.correlation
-            && let Some(response) = correlation.respond(frame, &ellipse, c.padding)
-        {
-            psr = response.psr;
-            // A response with no clear peak says nothing of where the
-            // target went, nor of its size.
-            let sure = psr >= c.min_psr;
-            if sure {
-                let (dx, dy) = (c.pull * response.shift.0, c.pull * response.shift.1);
-                shift_estimate(&mut ellipse, particles, (dx, dy), frame);
-            }
-            // The scale: windows one step larger and smaller about the new
-            // centre, against the first response, whose peak is already the
-            // best match at the present size wherever it lay in the window.
-            // Not where the size is decided outside (`search` false).
-            if sure && c.scale_step > 0.0 && search {
-                let mut best = (response.peak, 1.0);
-                for s in [1.0 + c.scale_step, 1.0 / (1.0 + c.scale_step)] {
-                    let scaled = Ellipse { hx: ellipse.hx * s, hy: ellipse.hy * s, ..ellipse };
-                    if let Some(r) = correlation.respond(frame, &scaled, c.padding)
-                        && r.peak > best.0
-                    {
-                        best = (r.peak, s);
-                    }
-                }
-                let f = 1.0 + c.scale_pull * (best.1 - 1.0);
-                scale_estimate(&mut ellipse, particles, (f, f));
-            }
-        }
+        let psr = cues.place(cfg, frame, (&mut ellipse, particles), search);
         let Some(target) = target.as_ref() else {
             return Look { ellipse, confidence: 0.0, similarity: 0.0, found: false, occluded_quadrant: None };
         };
@@ -285,13 +239,13 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         let seen = scratch.similarity(cfg, frame, models, &ellipse, true);
         let similarity = match cfg.boundary {
             Some(b) if observed.g_best > 0 => {
-                let g = (boundary_q(frame, &ellipse) as Real / observed.g_best as Real).min(1.0);
+                let g = (crate::boundary::score(frame, &ellipse) as Real / observed.g_best as Real).min(1.0);
                 (1.0 - b.weight) * seen.sim + b.weight * g
             }
             _ => seen.sim,
         };
         let occluded_quadrant =
-            if cfg!(feature = "quadrants") && cfg.quadrants { occluded(seen.quads, target.threshold) } else { None };
+            if crate::histogram::quadrants(cfg.quadrants) { occluded(seen.quads, target.threshold) } else { None };
         let (confidence, found) = match cfg.life {
             Life::Appearance => (similarity, observed.appearing as Real > cfg.kickoff * N as Real),
             Life::Confidence { lost_below, found_above } => {
@@ -344,25 +298,9 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     /// Adapts the models on steady, trustworthy tracking frames; returns
     /// whether they were updated.
     pub(super) fn adapt(&mut self, frame: &Frame<'_>, look: &Look, event: Option<Event>) -> bool {
-        let Tracker {
-            config: cfg,
-            scratch,
-            target,
-            state,
-            misses,
-            #[cfg(feature = "correlation")]
-            correlation,
-            ..
-        } = self;
+        let Tracker { config: cfg, scratch, target, state, misses, cues, .. } = self;
         let Some(target) = target.as_mut() else { return false };
-        // The filter learns on every confident frame, at its own slow rate:
-        // as a running mean over many frames it does not drift with one.
-        #[cfg(feature = "correlation")]
-        if let Some(c) = cfg.correlation
-            && look.confidence > c.learn_above
-        {
-            correlation.learn(frame, &look.ellipse, c.padding, c.rate);
-        }
+        cues.adapt(cfg, frame, &look.ellipse, look.confidence);
         let steady = *state == TrackState::Tracking && event.is_none() && *misses == 0 && cfg.alpha > 0.0;
         let d2_max = target.models.d2_max(cfg);
         let wanted = match cfg.model_update {

@@ -1,6 +1,7 @@
 use super::*;
 use crate::colour::Binning;
-use crate::config::{CorrelationCue, EdgeCue, ModelUpdate};
+use crate::config::{EdgeCue, ModelUpdate};
+use crate::correlation::CorrelationCue;
 use crate::frame::PixelFormat;
 use crate::histogram::Similarity;
 

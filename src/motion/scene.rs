@@ -29,6 +29,7 @@
 //! the frames of the two sequences where the box is left on the background
 //! and about 5% of frames on the target.
 
+use crate::cue::Cue;
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
 use crate::pixel::{self, Loop, Loops, PixelRead, RowReader};
@@ -437,6 +438,20 @@ impl SceneMotion {
         let (ex, ey) = self.early;
         let moved = sqrt(ex * ex + ey * ey) >= STILL * EARLY as Real;
         self.frames >= EARLY && moved && self.against < STILL && self.ring >= MOVING
+    }
+}
+
+impl Cue for SceneMotion {
+    type Settings = super::On;
+
+    fn start(&mut self, on: Option<&super::On>, frame: &Frame<'_>, e: &Ellipse) {
+        if on.is_some() {
+            SceneMotion::start(self, frame, e);
+        }
+    }
+
+    fn miss(&mut self, _: &super::On, frame: &Frame<'_>, e: &Ellipse, tracking: bool) -> bool {
+        self.update(frame, e, tracking)
     }
 }
 

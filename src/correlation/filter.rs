@@ -32,6 +32,9 @@
 //! tune split, about 0.01 lower on check; docs/accuracy.md). Built with the `correlation` feature only: every
 //! tracker built with it carries these bytes, used or not.
 
+use super::CorrelationCue;
+use crate::cue::Cue;
+use crate::filter::{Particle, scale_estimate, shift_estimate};
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
 use crate::pixel::{self, Loop, Loops, PixelRead, RowReader};
@@ -552,6 +555,63 @@ impl RowReader for WindowRow<'_, '_> {
 fn sub_cell(left: Real, peak: Real, right: Real) -> Real {
     let curvature = left - 2.0 * peak + right;
     if curvature < 0.0 { crate::scalar::clamp(0.5 * (left - right) / curvature, -0.5, 0.5) } else { 0.0 }
+}
+
+impl Cue for CorrelationFilter {
+    type Settings = CorrelationCue;
+
+    fn start(&mut self, settings: Option<&CorrelationCue>, frame: &Frame<'_>, e: &Ellipse) {
+        self.reset();
+        if let Some(c) = settings {
+            self.learn(frame, e, c.padding, c.rate);
+        }
+    }
+
+    /// Moves the estimate `pull` of the way to the response's peak, and
+    /// scales it towards the best of three window sizes, when the response
+    /// has a clear peak.
+    fn place<const N: usize>(
+        &mut self,
+        c: &CorrelationCue,
+        frame: &Frame<'_>,
+        (ellipse, particles): (&mut Ellipse, &mut [Particle; N]),
+        search: bool,
+    ) -> Option<Real> {
+        let response = self.respond(frame, ellipse, c.padding)?;
+        // A response with no clear peak says nothing of where the target
+        // went, nor of its size.
+        let sure = response.psr >= c.min_psr;
+        if sure {
+            let (dx, dy) = (c.pull * response.shift.0, c.pull * response.shift.1);
+            shift_estimate(ellipse, particles, (dx, dy), frame);
+        }
+        // The scale: windows one step larger and smaller about the new
+        // centre, against the first response, whose peak is already the
+        // best match at the present size wherever it lay in the window.
+        // Not where the size is decided outside (`search` false).
+        if sure && c.scale_step > 0.0 && search {
+            let mut best = (response.peak, 1.0);
+            for s in [1.0 + c.scale_step, 1.0 / (1.0 + c.scale_step)] {
+                let scaled = Ellipse { hx: ellipse.hx * s, hy: ellipse.hy * s, ..*ellipse };
+                if let Some(r) = self.respond(frame, &scaled, c.padding)
+                    && r.peak > best.0
+                {
+                    best = (r.peak, s);
+                }
+            }
+            let f = 1.0 + c.scale_pull * (best.1 - 1.0);
+            scale_estimate(ellipse, particles, (f, f));
+        }
+        Some(response.psr)
+    }
+
+    /// Learns on every confident frame, at its own slow rate: as a running
+    /// mean over many frames it does not drift with one.
+    fn adapt(&mut self, c: &CorrelationCue, frame: &Frame<'_>, e: &Ellipse, confidence: Real) {
+        if confidence > c.learn_above {
+            self.learn(frame, e, c.padding, c.rate);
+        }
+    }
 }
 
 #[cfg(test)]

@@ -1,0 +1,81 @@
+//! The interface of the cues beside the colour model that keep state of
+//! their own (the correlation filter, the surroundings-motion test).
+//!
+//! Each such cue is one module that holds its settings, their validation,
+//! its default, and the form it takes in a build without its Cargo feature
+//! ([`Absent`]: no memory, no work, settings refused by validation with an
+//! error that names the feature). The tracker keeps one value of each in
+//! its list of cues and calls the hooks below at fixed points of a step,
+//! with the cue's own settings; it names no feature.
+
+use crate::error::{ConfigError, ParamProblem};
+use crate::filter::Particle;
+use crate::frame::Frame;
+use crate::geometry::Ellipse;
+use crate::scalar::Real;
+use core::marker::PhantomData;
+
+/// A cue with state of its own. Every hook but [`Cue::start`] is called
+/// only while the cue is on (its settings are `Some`).
+pub(crate) trait Cue {
+    /// The cue's settings, as [`crate::Config`] holds them when it is on.
+    type Settings: Copy;
+
+    /// Learns the target afresh from its first box `e` (initialisation,
+    /// search, re-initialisation), forgetting any earlier target; `settings`
+    /// is `None` when the cue is off.
+    fn start(&mut self, settings: Option<&Self::Settings>, frame: &Frame<'_>, e: &Ellipse);
+
+    /// Looks at the frame around the filter's mean state before the size
+    /// and position searches, and may move the estimate and its particles
+    /// with it (`search` false: the size is decided elsewhere this frame).
+    /// Returns the peak-to-sidelobe ratio of its response, if it has one.
+    #[allow(unused_variables)]
+    fn place<const N: usize>(
+        &mut self,
+        settings: &Self::Settings,
+        frame: &Frame<'_>,
+        estimate: (&mut Ellipse, &mut [Particle; N]),
+        search: bool,
+    ) -> Option<Real> {
+        None
+    }
+
+    /// Whether this frame's estimate `e` counts as a miss (called on every
+    /// frame, so that running measures stay current; `tracking` while the
+    /// target is tracked).
+    #[allow(unused_variables)]
+    fn miss(&mut self, settings: &Self::Settings, frame: &Frame<'_>, e: &Ellipse, tracking: bool) -> bool {
+        false
+    }
+
+    /// Adapts to this frame's estimate `e`, whose confidence is `confidence`.
+    #[allow(unused_variables)]
+    fn adapt(&mut self, settings: &Self::Settings, frame: &Frame<'_>, e: &Ellipse, confidence: Real) {}
+}
+
+/// A cue this build leaves out: it takes no memory and does nothing (its
+/// settings never pass validation, see [`not_built`]).
+// Unused in a build with every such cue.
+#[cfg_attr(all(feature = "correlation", feature = "scene-motion"), allow(dead_code))]
+#[derive(Copy, Clone, Debug)]
+pub(crate) struct Absent<S>(PhantomData<S>);
+
+#[cfg_attr(all(feature = "correlation", feature = "scene-motion"), allow(dead_code))]
+impl<S> Absent<S> {
+    /// The stand-in.
+    pub(crate) const fn new() -> Self {
+        Absent(PhantomData)
+    }
+}
+
+impl<S: Copy> Cue for Absent<S> {
+    type Settings = S;
+
+    fn start(&mut self, _: Option<&S>, _: &Frame<'_>, _: &Ellipse) {}
+}
+
+/// The error for settings that ask for a cue this build leaves out.
+pub(crate) const fn not_built(field: &'static str, feature: &'static str) -> ConfigError {
+    ConfigError { field, problem: ParamProblem::NotBuilt { feature } }
+}
