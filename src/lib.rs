@@ -70,6 +70,7 @@ pub mod edges;
 pub mod error;
 pub mod estimate;
 pub mod filter;
+#[cfg(feature = "follower")]
 pub mod follower;
 pub mod foreground;
 pub mod frame;

@@ -96,40 +96,27 @@ pub(crate) fn read<R: RowReader>(format: PixelFormat, reader: R) -> R::Output {
 /// for a reader whose loops per format serve only some of its settings.
 #[inline(always)]
 pub(crate) fn read_if<R: RowReader>(specialise: bool, format: PixelFormat, reader: R) -> R::Output {
-    // Which loop, then one call per loop: each loop is compiled once
-    // however many formats share it.
-    let route = match format {
-        PixelFormat::Rgb565 if const { R::LOOPS.rgb565.compiled() } && specialise => Route::Rgb565,
-        PixelFormat::Rgb888 if const { R::LOOPS.rgb888.compiled() } && specialise => Route::Rgb888,
-        PixelFormat::Yuv422 if const { R::LOOPS.yuv422.compiled() } && specialise => Route::Yuv422,
-        PixelFormat::Gray8 if const { R::LOOPS.gray8.compiled() } && specialise => Route::Gray8,
-        // Their rows are their luma plane's.
-        PixelFormat::I420 | PixelFormat::Nv12 if const { R::LOOPS.planar_luma.compiled() } && specialise => {
-            Route::Gray8
+    let loops = const { R::LOOPS };
+    match format {
+        PixelFormat::Rgb565 if loops.rgb565.compiled() && specialise => reader.rows_of::<Rgb565>(),
+        PixelFormat::Rgb888 if loops.rgb888.compiled() && specialise => reader.rows_of::<Rgb888>(),
+        PixelFormat::Yuv422 if loops.yuv422.compiled() && specialise => reader.rows_of::<Yuv422>(),
+        // One arm for GRAY8 and the planar formats' luma plane, so that
+        // the loop they share is compiled once.
+        PixelFormat::Gray8 | PixelFormat::I420 | PixelFormat::Nv12
+            if specialise
+                && match format {
+                    PixelFormat::Gray8 => loops.gray8.compiled(),
+                    _ => loops.planar_luma.compiled(),
+                } =>
+        {
+            reader.rows_of::<Gray8>()
         }
         PixelFormat::Rgb565
         | PixelFormat::Rgb888
         | PixelFormat::Yuv422
         | PixelFormat::Gray8
         | PixelFormat::I420
-        | PixelFormat::Nv12 => Route::General,
-    };
-    match route {
-        Route::Rgb565 => reader.rows_of::<Rgb565>(),
-        Route::Rgb888 => reader.rows_of::<Rgb888>(),
-        Route::Yuv422 => reader.rows_of::<Yuv422>(),
-        Route::Gray8 => reader.rows_of::<Gray8>(),
-        Route::General => reader.general(),
+        | PixelFormat::Nv12 => reader.general(),
     }
-}
-
-/// The loops a reader may have: one per marker of [`PixelRead`], and the
-/// general one.
-#[derive(Copy, Clone)]
-enum Route {
-    Rgb565,
-    Rgb888,
-    Yuv422,
-    Gray8,
-    General,
 }
