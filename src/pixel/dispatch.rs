@@ -120,3 +120,92 @@ pub(crate) fn read_if<R: RowReader>(specialise: bool, format: PixelFormat, reade
         | PixelFormat::Nv12 => reader.general(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::Frame;
+
+    /// Every format, in code order. `position` matches exhaustively, so a
+    /// new format does not compile here until it is listed.
+    const ALL: [PixelFormat; 6] = [
+        PixelFormat::Rgb565,
+        PixelFormat::Rgb888,
+        PixelFormat::Yuv422,
+        PixelFormat::Gray8,
+        PixelFormat::I420,
+        PixelFormat::Nv12,
+    ];
+
+    fn position(f: PixelFormat) -> usize {
+        match f {
+            PixelFormat::Rgb565 => 0,
+            PixelFormat::Rgb888 => 1,
+            PixelFormat::Yuv422 => 2,
+            PixelFormat::Gray8 => 3,
+            PixelFormat::I420 => 4,
+            PixelFormat::Nv12 => 5,
+        }
+    }
+
+    /// Reads row `y` of a frame as lumas (`colour` false) or colours, by
+    /// whichever loop the dispatch picks, and says which it was.
+    struct Probe<'f, 'r, const COLOUR: bool> {
+        frame: &'r Frame<'f>,
+        y: usize,
+    }
+
+    impl<const COLOUR: bool> RowReader for Probe<'_, '_, COLOUR> {
+        type Output = (bool, Vec<[u8; 3]>);
+        // Every loop there is; a reader of colour cannot read the planar
+        // formats' chroma through a row of their luma plane.
+        const LOOPS: Loops = Loops {
+            rgb565: Loop::Always,
+            rgb888: Loop::Always,
+            yuv422: Loop::Always,
+            gray8: Loop::Always,
+            planar_luma: if COLOUR { Loop::General } else { Loop::Always },
+        };
+
+        fn rows_of<P: PixelRead>(self) -> Self::Output {
+            let row = self.frame.row(self.y).unwrap_or(&[]);
+            let read = |x| if COLOUR { P::rgb(row, x) } else { P::luma(row, x).map(|l| [l; 3]) };
+            (true, (0..self.frame.width()).filter_map(read).collect())
+        }
+
+        fn general(self) -> Self::Output {
+            let (f, y) = (self.frame, self.y);
+            let read = |x| if COLOUR { f.rgb(x, y) } else { f.luma(x, y).map(|l| [l; 3]) };
+            (false, (0..f.width()).filter_map(read).collect())
+        }
+    }
+
+    #[test]
+    fn every_format_reaches_a_loop_that_reads_what_the_frame_holds() {
+        // Reason: the frame's own accessors (`Frame::rgb`, `Frame::luma`)
+        // define each format's pixels; whatever loop the one dispatch picks
+        // for a format must read the same values, for readers of luma and
+        // of colour alike. A format given no loop would take the general
+        // one (checked: only the planar formats' colour does).
+        for (i, &format) in ALL.iter().enumerate() {
+            assert_eq!(position(format), i);
+            let (w, h) = (6, 4);
+            let bytes: Vec<u8> = (0..format.frame_bytes(w * format.bytes_per_pixel(), h).unwrap_or(0))
+                .map(|i| (i * 37 % 251) as u8)
+                .collect();
+            let frame = Frame::packed(&bytes, w, h, format).unwrap();
+            for y in 0..h {
+                let (own, lumas) = read(format, Probe::<false> { frame: &frame, y });
+                assert!(own, "{format:?}: lumas through a loop of their own");
+                let want: Vec<[u8; 3]> = (0..w).map(|x| [frame.luma(x, y).unwrap(); 3]).collect();
+                assert_eq!(lumas, want, "{format:?} row {y}: lumas");
+                let (own, rgb) = read(format, Probe::<true> { frame: &frame, y });
+                assert_eq!(own, !format.is_planar(), "{format:?}: colours through a loop of their own");
+                let want: Vec<[u8; 3]> = (0..w).map(|x| frame.rgb(x, y).unwrap()).collect();
+                assert_eq!(rgb, want, "{format:?} row {y}: colours");
+                // Not specialising takes the general loop.
+                assert!(!read_if(false, format, Probe::<true> { frame: &frame, y }).0);
+            }
+        }
+    }
+}
