@@ -48,7 +48,7 @@ pub(crate) fn validate(settings: Option<CorrelationCue>) -> Result<(), ConfigErr
 /// with a colour score (Bertinetto et al. 2016). Built with the
 /// `correlation` Cargo feature, a default one (its state takes RAM in every
 /// tracker built with it, and its working spectrum more stack while it
-/// reads a window: audit/budgets.txt), and on in [`Config::default`] where
+/// reads a window: audit/budgets.txt), and on in [`Config::default`](crate::Config::default) where
 /// built. Turning it off (`None`) saves most on a core without an FPU,
 /// where its FFTs run in software and are a large share of each frame's
 /// instructions (docs/performance.md); asking for it without the feature

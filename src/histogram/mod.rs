@@ -8,7 +8,7 @@
 //!
 //! All of it is integer (see [`crate::scalar`]): weights are `0..=256`, bins
 //! are `u32` sums, and the Bhattacharyya coefficient is an integer dot product
-//! of square roots, turned into a [`Real`] once per comparison.
+//! of square roots, turned into a [`Real`](crate::Real) once per comparison.
 
 mod model;
 #[cfg(test)]

@@ -39,7 +39,7 @@ pub struct Model<const K: usize, const W: usize = SUPPORT_WORDS> {
 /// The words of a [`Model`]'s bitmap of non-empty bins unless said
 /// otherwise: 16, one bit per bin of the 512 RGB bins. A model of fewer
 /// bins may take fewer words (the tracker's edge model, of
-/// [`MAX_EDGE_BINS`] bins, takes one: 60 bytes of RAM less).
+/// [`MAX_EDGE_BINS`](crate::MAX_EDGE_BINS) bins, takes one: 60 bytes of RAM less).
 pub const SUPPORT_WORDS: usize = 16;
 
 /// The non-empty bins of a model, as one bit per group of
