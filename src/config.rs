@@ -74,8 +74,8 @@ pub struct Config {
     /// (measured: the model then drifts onto an occluder). With the first
     /// paper's σ of 0.2 this is exactly its rule; the default 0.3 is a little
     /// more permissive, because the combined colour + edge distance is larger
-    /// than colour's alone (measured on the real sequences: 0.2 gives mean
-    /// AUC 0.51, 0.3 gives 0.58, and both keep the model still while the
+    /// than colour's alone (on the real sequences 0.3 scores higher than
+    /// 0.2, docs/accuracy.md, and both keep the model still while the
     /// fixtures' target is hidden).
     pub update_sigma: Real,
     /// A particle "appears" (sees the target) when its `ρ` exceeds the
@@ -109,10 +109,10 @@ pub struct Config {
     /// (the `motion` module, built with the `scene-motion` feature, a
     /// default one): a box left on the background by a panning camera is
     /// reported lost. On in [`Config::default`] where built: on the real
-    /// sequences it reports about twice the missing frames at the same
-    /// accuracy (docs/accuracy.md), for about 0.1 M instructions a QVGA
-    /// frame on a Cortex-M4F. Asking for it without the feature is a
-    /// configuration error.
+    /// sequences it reports many more of the missing frames at the same
+    /// accuracy (docs/accuracy.md), for a small share of a QVGA frame's
+    /// instructions on a Cortex-M4F (audit/budgets.txt). Asking for it
+    /// without the feature is a configuration error.
     pub scene_motion: bool,
     /// Size and shape searched each frame against the surroundings, or
     /// `None` to leave size to the particles' random walk.

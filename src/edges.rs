@@ -216,13 +216,13 @@ impl<const E: usize> EdgeMap<E> {
     /// three rows a Sobel window needs are read into a ring of rows, one
     /// format dispatch per ring row (then that format's own loop), and the
     /// cells are classified from the ring by loops shared by every format:
-    /// a classifying loop per format cost about 1.4 KB of Cortex-M0+ flash
-    /// each. Cells at most two pixels apart read whole spans of their rows,
-    /// and rows one pixel apart (a lattice of step 1 at full resolution)
-    /// share their lumas with the next map row: each pixel's luma is
-    /// computed once (measured on the QVGA audit: 175 instructions per cell
-    /// with six lumas read per cell). Sparser cells read only the three
-    /// columns of each cell's window.
+    /// a classifying loop per format would repeat the same code in flash
+    /// once per format. Cells at most two pixels apart read whole spans of
+    /// their rows, and rows one pixel apart (a lattice of step 1 at full
+    /// resolution) share their lumas with the next map row: each pixel's
+    /// luma is computed once, rather than six lumas read for every cell,
+    /// which costs more instructions per cell. Sparser cells read only the
+    /// three columns of each cell's window.
     fn fill(&mut self, frame: &Frame<'_>, bins: usize, threshold: u16, weak: u8) {
         /// Lumas per ring row.
         const SPAN: usize = 192;
@@ -430,9 +430,9 @@ fn luma_windows(frame: &Frame<'_>, row: &[u8], at: (usize, usize), dst: &mut [u8
 fn luma_windows_of<P: PixelRead>(row: &[u8], (x0, dx): (usize, usize), dst: &mut [u8]) {
     // Column x − 1 of x = 0 reads as 0 (such a cell is at the frame's
     // border and never classified): through a wrapped index past the
-    // slice where there is one (a branch per cell here cost 29 k
-    // instructions a QVGA frame), and by asking for no column where the
-    // format computes an offset from it. The row's pixels are sliced once,
+    // slice where there is one (cheaper per frame than a branch per cell
+    // here), and by asking for no column where the format computes an
+    // offset from it. The row's pixels are sliced once,
     // not per read.
     match P::pixels(row) {
         Some(px) => {
@@ -535,11 +535,11 @@ struct SobelCells {
 /// to the next. Cells at the frame's border, a last cell alone, and the
 /// checkerboard cells of byte maps go one cell at a time. Out of line and
 /// shared by every pixel format; compiled per cell spacing `XS` (1 or 2
-/// pixels), so that each copy holds only its own loop (measured on the QVGA
-/// audit: 40 k instructions per frame less than with the
-/// spacing at run time). `XS` 0 takes the spacing `dx` at run time: one
-/// copy, in the [`LEAN`](crate::LEAN) builds (measured with `audit/run
-/// size`: 344 B of Cortex-M0+ code less).
+/// pixels), so that each copy holds only its own loop (fewer instructions
+/// per frame on the QVGA audit than with the spacing at run time). `XS` 0
+/// takes the spacing `dx` at run time: one copy, in the
+/// [`LEAN`](crate::LEAN) builds, where code space counts for more than
+/// this loop's speed (`audit/run size`; audit/budgets.txt).
 #[inline(never)]
 fn ring_cells<const XS: usize>(
     out: &mut [u8],
@@ -728,8 +728,8 @@ impl<const E: usize> EdgeMap<E> {
 /// lattice spaced so that its bounding box holds at most about 1024,
 /// where the 3x3 window fits in the frame; with none, or `percent` 0,
 /// `threshold`.
-// Once per target, so out of line and small rather than fast (measured:
-// 1.8 KB of Cortex-M4 code with the pixel reads inlined).
+// Once per target, so out of line and small rather than fast: with the
+// pixel reads inlined it would take much more code for no gain per frame.
 #[inline(never)]
 pub(crate) fn soft_threshold(frame: &Frame<'_>, e: &Ellipse, threshold: u16, percent: u8) -> u16 {
     const SAMPLES: usize = 1024;

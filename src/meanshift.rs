@@ -394,7 +394,7 @@ impl<const K: usize> MeanShift<K> {
 
 /// The colour histogram of `e`. One out-of-line copy: the histogram loop is
 /// compiled per pixel format, and inlining it at each of its call sites
-/// would cost flash several times over (measured: about 13 KB on Cortex-M4).
+/// would cost flash several times over.
 #[inline(never)]
 fn colour_histogram<const K: usize>(hist: &mut Histogram<K>, frame: &Frame<'_>, e: &Ellipse, cfg: &MeanShiftConfig) {
     hist.compute_on(frame, e, cfg.binning, lattice(cfg, e));

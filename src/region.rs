@@ -228,7 +228,7 @@ fn align_up_on<const HW: bool>(from: i32, modulus: usize, phase: usize) -> i32 {
     let m = (modulus as u32).max(1);
     // Moduli 1 and 2 (every pixel, checkerboard, quarter) are the common
     // case: no division for them, which a Cortex-M0+ or an ARM11 does in
-    // software (a library call of about 40 instructions). Otherwise at most
+    // software (a library call, many times a shift's cost). Otherwise at most
     // one, none for a power of two: the phase is below the modulus (a
     // lattice's phase is 0 or its step, its column step being twice that),
     // and `p + m − f % m` is below `2m`, so a subtraction reduces both.
@@ -424,10 +424,10 @@ pub(crate) fn shrink(dx_max: &mut u32, rem: u32, ax: u32) {
 /// `a / b` for `b >= 1`, with no division for the common steps 1 and 2,
 /// and on cores without a divider (a Cortex-M0+ or an ARM11 divides in
 /// software) none for the other powers of two either: the default
-/// checkerboard thinned to step 2 has a column step of 4 (measured on the
-/// ARM1136: 0.34 M instructions per QVGA frame with the shifts in
-/// [`align_up`]; on a Cortex-M4F the division is one instruction, fewer
-/// than the test and shift).
+/// checkerboard thinned to step 2 has a column step of 4 (on the ARM1136
+/// the shifts here and in [`align_up`] save a visible share of a QVGA
+/// frame's instructions, docs/performance.md; on a Cortex-M4F the division
+/// is one instruction, fewer than the test and shift).
 #[inline(always)]
 pub(crate) fn div_small(a: u32, b: u32) -> u32 {
     div_small_on::<HARDWARE_DIVIDE>(a, b)

@@ -124,8 +124,9 @@ pub fn clamp(v: Real, lo: Real, hi: Real) -> Real {
 
 /// The larger of `a` and `b`, or the one that is not NaN: `f32::max`'s
 /// answer, by comparisons. `f32::max` is a library call (`fmaxf`) on a
-/// Cortex-M4F, and the tracker takes a few thousand per frame (measured:
-/// 2% of the QVGA audit's instructions between `fmaxf` and `fminf`).
+/// Cortex-M4F, and the tracker takes thousands per frame: as calls,
+/// `fmaxf` and `fminf` are a visible share of the QVGA audit's
+/// instructions (`audit/profile`, docs/performance.md).
 #[inline(always)]
 pub fn max(a: Real, b: Real) -> Real {
     if a > b || b.is_nan() { a } else { b }
@@ -172,12 +173,12 @@ pub fn sqrt_q4(x: u32) -> u32 {
 /// `x`, one integer Newton step and a correction, by whichever of
 /// [`isqrt_by_division`] and [`isqrt_by_reciprocal`] suits the core.
 ///
-/// `core`'s `u32::isqrt` took about 64 instructions per call on the
-/// Cortex-M4F (two divisions and a long normalisation), and the
-/// Bhattacharyya sum takes one root per non-empty bin of every particle.
-/// The Newton step `y + (x − y²)/(2y)` divides: one instruction on a core
-/// with a divider (Cortex-M3 and up), a library call of about 40 on one
-/// without (Cortex-M0+, ARM11), where it was a fifth of the ARM1136's
+/// `core`'s `u32::isqrt` is costly per call on the Cortex-M4F (two
+/// divisions and a long normalisation), and the Bhattacharyya sum takes
+/// one root per non-empty bin of every particle. The Newton step
+/// `y + (x − y²)/(2y)` divides: one instruction on a core with a divider
+/// (Cortex-M3 and up), a library call on one without (Cortex-M0+, ARM11),
+/// where the divisions alone would be a large share of the ARM1136's
 /// instructions per frame. Both are exact, so the choice changes no
 /// result: tested against `u32::isqrt` on every `x < 2^26`, around every
 /// square up to `2^32`, and (ignored by default) on every `u32`.

@@ -24,13 +24,16 @@
 //! Memory: the samples are real, so their spectrum is Hermitian and only
 //! columns 0 to `GRID / 2` of it are kept (9 of 16); the Gaussian peak is
 //! separable and even, so its spectrum is the outer product of one real
-//! vector with itself, a table computed at compile time. `A` and `B` take
-//! 1,728 B in `f32` (the FFTs are `microfft`'s, `f32` like [`Real`]); the
-//! working spectrum, 1,152 B, lives on the stack while a window is read.
+//! vector with itself, a table computed at compile time. `A` and `B` are
+//! kept in `f32` (the FFTs are `microfft`'s, `f32` like [`Real`]), packed
+//! as `CorrelationFilter` says; the working spectrum, a whole half
+//! spectrum, lives on the stack while a window is read (the RAM and stack
+//! they take: audit/budgets.txt).
 //! A 16-point lattice rather than 32: a quarter of the memory and of the
 //! work, for the same accuracy over the recorded sequences (higher on the
-//! tune split, about 0.01 lower on check; docs/accuracy.md). Built with the `correlation` feature only: every
-//! tracker built with it carries these bytes, used or not.
+//! tune split, a little lower on check; docs/accuracy.md). Built with the
+//! `correlation` feature only: every tracker built with it carries this
+//! memory, used or not.
 
 use super::CorrelationCue;
 use crate::cue::Cue;
@@ -401,8 +404,8 @@ impl CorrelationFilter {
     }
 
     /// `A` and `B` at `at` (learning writes them in place by the same
-    /// slots: one lookup each rather than a read and a write, measured 2 k
-    /// instructions a QVGA frame and 24 B of code less).
+    /// slots: one lookup each rather than a read and a write, for fewer
+    /// instructions per frame and less code).
     fn entry(&self, at: Slot) -> (Complex32, Real) {
         let a = self.num.get(at.row).and_then(|n| n.get(at.col)).copied().unwrap_or_default();
         let b = match at.part {

@@ -46,12 +46,13 @@ pub(crate) fn validate(settings: Option<CorrelationCue>) -> Result<(), ConfigErr
 /// filter's mean state moves `pull` of the way to the peak. A second cue
 /// beside colour that sees texture, as Staple pairs a correlation filter
 /// with a colour score (Bertinetto et al. 2016). Built with the
-/// `correlation` Cargo feature, a default one (1.5 KB of RAM in every
-/// tracker built with it, and 1.2 KB more stack while it reads a window),
-/// and on in [`Config::default`] where built. Turning it off (`None`)
-/// halves the instructions per frame on a core without an FPU, where its
-/// FFTs run in software; asking for it without the feature is a
-/// configuration error.
+/// `correlation` Cargo feature, a default one (its state takes RAM in every
+/// tracker built with it, and its working spectrum more stack while it
+/// reads a window: audit/budgets.txt), and on in [`Config::default`](crate::Config::default) where
+/// built. Turning it off (`None`) saves most on a core without an FPU,
+/// where its FFTs run in software and are a large share of each frame's
+/// instructions (docs/performance.md); asking for it without the feature
+/// is a configuration error.
 ///
 /// ```
 /// use pftrack::{Config, ConfigError, CorrelationCue, Error, ParamProblem, Tracker};

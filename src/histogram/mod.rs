@@ -8,7 +8,7 @@
 //!
 //! All of it is integer (see [`crate::scalar`]): weights are `0..=256`, bins
 //! are `u32` sums, and the Bhattacharyya coefficient is an integer dot product
-//! of square roots, turned into a [`Real`] once per comparison.
+//! of square roots, turned into a [`Real`](crate::Real) once per comparison.
 
 mod model;
 #[cfg(test)]
@@ -249,10 +249,9 @@ impl<const K: usize> Histogram<K> {
         let (counts, edge) = (&mut self.counts, &mut edge.counts);
         // The default case (the checkerboard, RGB565 or GRAY8 pixels, a
         // 4-bit edge map at full resolution) has a walk of its own whose
-        // rows cost a fraction of the general walk's set-up (measured: 454
-        // instructions per row outside the pixel loop on a Cortex-M4, for
-        // rows of 16 samples); both visit the same samples with the same
-        // weights (tested).
+        // rows cost a fraction of the general walk's set-up outside the
+        // pixel loop (`audit/profile`, docs/performance.md); both visit the
+        // same samples with the same weights (tested).
         let checker = match map.and_then(|m| m.checker_rows()) {
             Some(rows) if lattice == Lattice::CHECKERBOARD && P::CHECKER_WALK => {
                 checker_walk::<P, K>(frame, e, rows, counts, edge)
@@ -277,8 +276,8 @@ pub(crate) enum Clear<'a> {
     /// with that model (one segment): the Bhattacharyya and intersection
     /// sums read no other bin (an intersection term is 0 where the model
     /// is), so the rest may keep what earlier regions left there. It
-    /// spares clearing all `K` bins per particle (measured on the QVGA
-    /// audit: 0.1 M instructions per frame in `memclr` for 512 bins).
+    /// spares clearing all `K` bins per particle, a `memclr` that with 512
+    /// bins shows in the QVGA audit's instructions per frame.
     Support(&'a Support),
 }
 

@@ -39,7 +39,7 @@ pub struct Model<const K: usize, const W: usize = SUPPORT_WORDS> {
 /// The words of a [`Model`]'s bitmap of non-empty bins unless said
 /// otherwise: 16, one bit per bin of the 512 RGB bins. A model of fewer
 /// bins may take fewer words (the tracker's edge model, of
-/// [`MAX_EDGE_BINS`] bins, takes one: 60 bytes of RAM less).
+/// [`MAX_EDGE_BINS`](crate::MAX_EDGE_BINS) bins, takes one: 60 bytes of RAM less).
 pub const SUPPORT_WORDS: usize = 16;
 
 /// The non-empty bins of a model, as one bit per group of
@@ -124,7 +124,7 @@ impl<const K: usize, const W: usize> Model<K, W> {
     pub(crate) fn from_segments(h: &Histogram<K>, segments: u8) -> Option<Self> {
         // Checked before the model is built, so that it is built in place
         // (an early return from the filling loop costs a 2·K-byte copy on
-        // the stack: measured, +2 KB of peak stack in `init`).
+        // the stack, which raises `init`'s peak stack: audit/budgets.txt).
         if !Self::can_learn(h, segments) {
             return None;
         }
@@ -325,8 +325,8 @@ pub(super) fn segment_total<const K: usize>(h: &Histogram<K>, c: &[u32], segment
 }
 
 /// One block's similarity. Out of line, so that the per-particle caller
-/// holds one copy of each sum rather than one per quadrant (measured: +3 KB
-/// of Cortex-M4 code when inlined).
+/// holds one copy of each sum rather than one per quadrant (inlined, the
+/// copies cost more code than the call saves).
 #[inline(never)]
 pub(super) fn compare_block<const K: usize, const W: usize>(
     c: &[u32],
@@ -367,8 +367,8 @@ pub(super) fn bhattacharyya<const K: usize, const W: usize>(
 
 /// `ρ` from the sum `Σ 16·sqrt(c(u)) · 4096·sqrt(q(u))` and the counts'
 /// total `C` (not 0), clamped to `[0, 1]`. Inlined: it ends every
-/// particle's Bhattacharyya sum (measured: 14 k instructions a frame on the
-/// QVGA audit as a call).
+/// particle's Bhattacharyya sum, so a call's overhead would be paid once
+/// per particle and show in the QVGA audit's instructions per frame.
 #[inline(always)]
 pub(super) fn rho_of(sum: u64, total: u32) -> Real {
     // Σ 16·sqrt(c) · 4096·sqrt(q) / (16·sqrt(C) · 4096)

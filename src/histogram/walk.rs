@@ -309,8 +309,7 @@ pub(super) fn checker_walk<P: PixelRead, const K: usize>(
             } else {
                 let plan = RowPlan { first: first as usize, n, start: (one - ry2, r.ax, first - r.cx), base };
                 // The map row's offset from y, not the carried ones: carried
-                // into this cold branch, they cost the common rows spills
-                // (measured: 5 k instructions per QVGA frame).
+                // into this cold branch, they cost the common rows spills.
                 for (y, on) in [(y_up, up), (y_down, down)] {
                     let start = (y as usize).wrapping_sub(j0).wrapping_mul(stride);
                     if on && let Some(row) = frame.row(y as usize) {
@@ -406,8 +405,8 @@ pub(super) fn edge_row<P: PixelRead, const K: usize>(
 /// (see [`checker_walk`], which also sums the colour mass). Out of line, so
 /// that the loop has the registers to itself (inlined, it kept half of its
 /// state on the stack); the histograms come first among the arguments, so
-/// that they arrive in registers and stay there (measured: one instruction
-/// per pair less than reloading them from the stack).
+/// that they arrive in registers and stay there rather than being
+/// reloaded from the stack for every pair.
 #[inline(never)]
 pub(super) fn pair_loop<P: PixelRead, const K: usize>(
     counts: &mut [u32; K],

@@ -21,7 +21,7 @@ pub(crate) type SceneMotion = Absent<On>;
 #[derive(Copy, Clone, Debug)]
 pub(crate) struct On;
 
-/// On wherever it is built: on the real sequences it reports about twice
+/// On wherever it is built: on the real sequences it reports many more of
 /// the missing frames at the same accuracy (docs/accuracy.md).
 pub(crate) const DEFAULT: bool = cfg!(feature = "scene-motion");
 

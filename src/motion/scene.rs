@@ -27,7 +27,7 @@
 //! docs/accuracy.md). Measured offline on the real sequences
 //! (`tools/local-motion`, full-resolution matching), the test flags most of
 //! the frames of the two sequences where the box is left on the background
-//! and about 5% of frames on the target.
+//! and few of the frames on the target.
 
 use crate::cue::Cue;
 use crate::frame::Frame;
@@ -287,9 +287,9 @@ fn sum_rows<P: PixelRead>(
 /// two such shifts, each rounded on its own when whole. A box left on the
 /// background of a scene panning 1.5 px a frame reads 1 or 2 px, and its
 /// ring the other, from frame to frame: 1 px "against" half the time, a
-/// running mean near the [`STILL`] threshold. Measured on the real
-/// sequences (docs/accuracy.md), the fraction lifts the share of missing
-/// frames the test reports from about half to about two thirds.
+/// running mean near the [`STILL`] threshold. On the real sequences the
+/// fraction lifts the share of missing frames the test reports
+/// (docs/accuracy.md).
 fn best_shift(
     frame: &Frame<'_>,
     lattice: &Lattice,
@@ -332,8 +332,8 @@ fn best_shift(
     // there was one (a unit step that found nothing better), or are
     // measured now.
     let (v, d) = best?;
-    // `k` is the offset's index in `AROUND` (a lookup by offset cost 168 B
-    // of code and 300 instructions a frame).
+    // `k` is the offset's index in `AROUND` (less code and fewer
+    // instructions a frame than a lookup by offset).
     let near = |k: usize, (ox, oy): (i32, i32)| around.get(k).copied().flatten().or_else(|| diff((d.0 + ox, d.1 + oy)));
     let (left, right, up, down) = (near(3, (-1, 0)), near(4, (1, 0)), near(1, (0, -1)), near(6, (0, 1)));
     let fx = d.0 as Real + vertex(left, v, right);
@@ -392,9 +392,8 @@ impl SceneMotion {
             // the ring's, at most three, along the axes only (a diagonal
             // takes two): a box moving further against its ring is not
             // moving with it, whatever the exact figure, and the fraction
-            // needs only the axis neighbours. Measured: the box's search
-            // costs a third less than with diagonals (about 35,000
-            // instructions a QVGA frame on the Cortex-M4F), with the same
+            // needs only the axis neighbours. Compared with diagonals, the
+            // box's search costs fewer instructions a frame, with the same
             // reports on the real sequences.
             //
             // Which stored points lay in the frame follows from the box: the

@@ -56,8 +56,8 @@ pub(crate) trait PixelRead {
 /// The expanded channels are `R8 = f(hi)`, `B8 = f(lo)` and
 /// `G8 = 32·(hi & 7) + ((hi & 7) >> 1) + 4·(lo >> 5)` (the bit replication
 /// of the 6-bit green splits the same way), so `77·R8 + 150·G8 + 29·B8`
-/// does too. 1 KiB of flash saves about 20 instructions per pixel of the
-/// edge map on a Cortex-M4.
+/// does too. The tables' 1 KiB of flash spares the channels' expansion
+/// and three multiplies for every pixel of the edge map.
 static RGB565_LUMA: [[u16; 256]; 2] = rgb565_luma_tables();
 
 /// Builds [`RGB565_LUMA`]. Evaluated at compile time only, where an index
@@ -82,9 +82,9 @@ const fn rgb565_luma_tables() -> [[u16; 256]; 2] {
 
 /// The red and green part of an RGB565 pixel's 8x8x8 bin, by its high byte
 /// (`RRRRRGGG`): `(r >> 2) << 6 | (g >> 3) << 3`.
-/// A table instead of two shifts and masks: measured on the QVGA audit,
-/// 0.24 M fewer instructions per frame (without the masks' constants, the
-/// pixel loop has the registers it needs).
+/// A table instead of two shifts and masks: fewer instructions per QVGA
+/// frame, because without the masks' constants the pixel loop has the
+/// registers it needs (docs/performance.md).
 static RGB565_HIGH_BIN: [u16; 256] = rgb565_high_bin_table();
 
 /// Builds [`RGB565_HIGH_BIN`]. Evaluated at compile time only, where an

@@ -20,9 +20,9 @@ pub(super) const SPEED_RATE: Real = 0.3;
 /// A logistic model, `1 / (1 + exp(−z))` with `z = 9.2·contrast +
 /// 2.4·correlation + 4.8·anchored − 4.2`, whose coefficients are a logistic
 /// regression of "IoU with the truth ≥ 0.1" on the real sequences' tune
-/// split (`tools/fit-confidence`; docs/accuracy.md). Each signal alone
-/// separates missing frames from the others with a ROC AUC of 0.75 to 0.87
-/// there; together, 0.90.
+/// split (`tools/fit-confidence`; docs/accuracy.md). Together the three
+/// separate missing frames from the others better there than any one of
+/// them alone (the ROC AUCs are in docs/accuracy.md).
 pub fn on_target(contrast: Real, correlation: Real, anchored: Real) -> Real {
     let z = 9.2 * contrast + 2.4 * correlation.max(0.0) + 4.8 * anchored - 4.2;
     1.0 / (1.0 + exp(-z))

@@ -231,10 +231,11 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     /// The models of `bbox` and the background statistics of `frame`.
     /// Learns the target of `bbox` into `self.target`; on an error the
     /// tracker is unchanged. The target is built in place: returned by value,
-    /// its models (2 KB at the default K) were copied through the stack
-    /// (11.6 KB of peak stack in `init` on a Cortex-M4, measured). Out of
-    /// line, so that its locals are gone before a cue's working memory
-    /// (the correlation filter's spectrum) joins the stack.
+    /// its models (2 KB at the default K) would be copied through the
+    /// stack, taking `init`'s peak stack far past its budget
+    /// (audit/budgets.txt). Out of line, so that its locals are gone before
+    /// a cue's working memory (the correlation filter's spectrum) joins the
+    /// stack.
     #[inline(never)]
     fn learn(&mut self, frame: &Frame<'_>, bbox: &BoundingBox) -> Result<(), Error> {
         bbox.validate(frame.width(), frame.height())?;
