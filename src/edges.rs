@@ -537,9 +537,9 @@ struct SobelCells {
 /// shared by every pixel format; compiled per cell spacing `XS` (1 or 2
 /// pixels), so that each copy holds only its own loop (fewer instructions
 /// per frame on the QVGA audit than with the spacing at run time). `XS` 0
-/// takes the spacing `dx` at run time: one copy, in the
-/// [`LEAN`](crate::LEAN) builds, where code space counts for more than
-/// this loop's speed (`audit/run size`; audit/budgets.txt).
+/// takes the spacing `dx` at run time: one copy, where loops that only
+/// save time are left out (`Loop::Fast` in `crate::pixel`), because code
+/// space counts for more than this loop's speed (audit/budgets.txt).
 #[inline(never)]
 fn ring_cells<const XS: usize>(
     out: &mut [u8],
