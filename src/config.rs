@@ -3,6 +3,7 @@
 use crate::boundary::BoundaryCue;
 use crate::colour::Binning;
 use crate::correlation::CorrelationCue;
+use crate::edges::EdgeCue;
 use crate::error::{ConfigError, ParamProblem, check, positive};
 use crate::filter::{Dynamics, Resampling};
 use crate::histogram::Similarity;
@@ -285,45 +286,6 @@ pub struct TableMode {
     /// `T` cells.
     pub spacing: u8,
 }
-
-/// Parameters of the edge-orientation cue.
-#[derive(Copy, Clone, Debug, PartialEq, Eq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct EdgeCue {
-    /// Orientation bins over 0–180°: 2, 4, 8 or 16.
-    pub bins: u8,
-    /// Gradients with `sqrt(gx² + gy²)` below this are dropped (Sobel on 8-bit
-    /// grey levels, so strengths range up to about 1440). The largest
-    /// threshold a target gets: see `strong_percent`.
-    pub threshold: u16,
-    /// The share of the first box's pixels, in percent, that should count as
-    /// edges. Where fewer reach `threshold`, that target's threshold is
-    /// lowered to the strength this share does reach (never below
-    /// [`MIN_EDGE_THRESHOLD`]; [`crate::Tracker::edge_threshold`] says what
-    /// was chosen). Magnification and blur spread an edge over more pixels
-    /// and weaken each one's gradient; a fixed threshold would then drop
-    /// them all and leave the cue blind. 0 keeps `threshold` fixed.
-    pub strong_percent: u8,
-    /// Count the dropped weak pixels in one more bin, so that the histogram
-    /// also measures how much of the region has edges. Without it, a flat
-    /// patch with a few stray edges can match a textured target perfectly
-    /// (measured on the exit-and-return scene: the filter "saw" its target in
-    /// an empty background).
-    pub flat_bin: bool,
-}
-
-/// The lowest threshold [`EdgeCue::strong_percent`] lowers to: a gradient
-/// of 10 is a step of about 2.5 grey levels, above the noise of a flat
-/// patch in a JPEG or a sensor's frame.
-pub const MIN_EDGE_THRESHOLD: u16 = 10;
-
-/// Capacity of an edge histogram: 16 orientation bins, the most an
-/// [`EdgeCue`] may ask for, plus the flat bin.
-pub const MAX_EDGE_BINS: usize = 17;
-
-/// The words of the edge model's bitmap of non-empty bins
-/// ([`crate::Model`]'s `W`): one bit per bin of its [`MAX_EDGE_BINS`].
-pub const EDGE_SUPPORT_WORDS: usize = MAX_EDGE_BINS.div_ceil(32);
 
 impl Default for Config {
     /// The defaults, chosen by the ablation on the real sequences' *tune*

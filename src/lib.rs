@@ -90,12 +90,9 @@ pub mod tracker;
 
 pub use boundary::BoundaryCue;
 pub use colour::Binning;
-pub use config::{
-    BackgroundWeight, Config, EDGE_SUPPORT_WORDS, EdgeCue, Life, MAX_EDGE_BINS, ModelUpdate, ShiftSearch, SizeSearch,
-    TableMode, TemplateCue,
-};
+pub use config::{BackgroundWeight, Config, Life, ModelUpdate, ShiftSearch, SizeSearch, TableMode, TemplateCue};
 pub use correlation::CorrelationCue;
-pub use edges::{EdgeMap, EdgeParams};
+pub use edges::{EDGE_SUPPORT_WORDS, EdgeCue, EdgeMap, EdgeParams, MAX_EDGE_BINS};
 pub use error::{ChromaPlane, ConfigError, Error, FrameError, ParamProblem, RegionError};
 pub use estimate::{Diagnostics, Estimate, Event, Trace, TrackState};
 pub use filter::{Dynamics, Particle, Resampling};

@@ -17,8 +17,8 @@
 //! The ablation (`track ablate`) and README give the measured figures.
 
 use crate::colour::{Binning, levels_bin};
-use crate::config::{EDGE_SUPPORT_WORDS, MAX_EDGE_BINS};
 use crate::edges::EdgeMap;
+use crate::edges::{EDGE_SUPPORT_WORDS, MAX_EDGE_BINS};
 use crate::frame::Frame;
 use crate::histogram::{Histogram, Model};
 use crate::likelihood::Combination;

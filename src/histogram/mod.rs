@@ -16,8 +16,8 @@ mod tests;
 mod walk;
 
 use crate::colour::{Binning, levels_bin};
-use crate::config::MAX_EDGE_BINS;
 use crate::cue::not_built;
+use crate::edges::MAX_EDGE_BINS;
 use crate::edges::{EdgeMap, NIBBLE_NONE};
 use crate::error::ConfigError;
 use crate::frame::Frame;

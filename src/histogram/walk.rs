@@ -2,7 +2,7 @@
 //! pixel format where it pays, the general one otherwise.
 
 use crate::colour::{Binning, levels_bin};
-use crate::config::MAX_EDGE_BINS;
+use crate::edges::MAX_EDGE_BINS;
 use crate::edges::{EdgeMap, NIBBLE_NONE, RowCells};
 use crate::frame::Frame;
 use crate::geometry::Ellipse;

@@ -10,8 +10,9 @@ mod step;
 #[cfg(test)]
 mod tests;
 
-use crate::config::{Config, EDGE_SUPPORT_WORDS, Life, MAX_EDGE_BINS, TableMode};
+use crate::config::{Config, Life, TableMode};
 use crate::edges::EdgeMap;
+use crate::edges::{EDGE_SUPPORT_WORDS, MAX_EDGE_BINS};
 use crate::error::{ConfigError, Error, ParamProblem, RegionError};
 use crate::estimate::{Diagnostics, Estimate, TrackState};
 use crate::filter::Particle;

@@ -1,8 +1,9 @@
 //! The tracker's memory: the learnt target and its models, and the working
 //! memory for observing regions.
 
-use crate::config::{Config, EDGE_SUPPORT_WORDS, Life, MAX_EDGE_BINS};
+use crate::config::{Config, Life};
 use crate::edges::EdgeMap;
+use crate::edges::{EDGE_SUPPORT_WORDS, MAX_EDGE_BINS};
 use crate::foreground::{Foreground, ForegroundMap};
 use crate::frame::Frame;
 use crate::geometry::Ellipse;

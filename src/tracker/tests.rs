@@ -1,7 +1,8 @@
 use super::*;
 use crate::colour::Binning;
-use crate::config::{EdgeCue, ModelUpdate};
+use crate::config::ModelUpdate;
 use crate::correlation::CorrelationCue;
+use crate::edges::EdgeCue;
 use crate::frame::PixelFormat;
 use crate::histogram::Similarity;
 
@@ -86,7 +87,7 @@ fn a_soft_target_keeps_its_edge_cue() {
     let mut t: Tracker<20> = Tracker::new(Config::default(), 1).unwrap();
     t.init(&f, BOX).unwrap();
     let th = t.edge_threshold().unwrap();
-    assert!((crate::config::MIN_EDGE_THRESHOLD..=57).contains(&th), "threshold {th}");
+    assert!((crate::edges::MIN_EDGE_THRESHOLD..=57).contains(&th), "threshold {th}");
     assert!(t.edge_model().is_some(), "the lowered threshold keeps the texture's edges");
     let mut t: Tracker<20> = Tracker::new(Config { edges: None, ..Config::default() }, 1).unwrap();
     t.init(&f, BOX).unwrap();
