@@ -53,25 +53,26 @@ pub fn birge_rozenholc(counts: &[u32]) -> Real {
 
 /// Asking for adaptive bins in a build without them is an error that names
 /// the feature.
-pub(crate) fn validate(binning: crate::Binning) -> Result<(), ConfigError> {
-    if binning == crate::Binning::Adaptive && !cfg!(feature = "adaptive-bins") {
+#[inline]
+pub(crate) fn validate(binning: crate::colour::Binning) -> Result<(), ConfigError> {
+    if binning == crate::colour::Binning::Adaptive && !cfg!(feature = "adaptive-bins") {
         return Err(not_built("binning", "adaptive-bins"));
     }
     Ok(())
 }
 
 /// The levels per channel of each segment under `binning`: chosen by
-/// [`choose_levels`] for [`crate::Binning::Adaptive`] in a build with the
+/// [`choose_levels`] for [`crate::colour::Binning::Adaptive`] in a build with the
 /// `adaptive-bins` feature, `None` (the layout's own) otherwise.
 pub(crate) fn levels<const K: usize>(
-    binning: crate::Binning,
+    binning: crate::colour::Binning,
     hist: &mut Histogram<K>,
     frame: &Frame<'_>,
     e: &Ellipse,
     lattice: Lattice,
     segments: u8,
 ) -> Option<[u8; 4]> {
-    (cfg!(feature = "adaptive-bins") && binning == crate::Binning::Adaptive)
+    (cfg!(feature = "adaptive-bins") && binning == crate::colour::Binning::Adaptive)
         .then(|| choose_levels(hist, frame, e, lattice, segments))
 }
 

@@ -33,6 +33,7 @@ pub struct BoundaryCue {
 
 /// Checks the settings; asking for the cue in a build without it is an
 /// error that names the feature.
+#[inline]
 pub(crate) fn validate(settings: Option<BoundaryCue>) -> Result<(), ConfigError> {
     let Some(b) = settings else { return Ok(()) };
     if !cfg!(feature = "boundary") {

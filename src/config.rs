@@ -6,6 +6,7 @@ use crate::correlation::CorrelationCue;
 use crate::edges::EdgeCue;
 use crate::error::{ConfigError, ParamProblem, check, positive};
 use crate::filter::{Dynamics, Resampling};
+use crate::foreground::BackgroundWeight;
 use crate::histogram::Similarity;
 use crate::likelihood::{Combination, Likelihood, Shape, Sigma};
 use crate::region::Sampling;
@@ -233,26 +234,6 @@ pub struct ShiftSearch {
     /// a box from the same box a few pixels off on a target of one colour,
     /// the layout of light and dark can.
     pub template: Real,
-}
-
-/// How the colour model's bins are weighted against the surroundings (the
-/// background-weighted histograms of CBWH, Ning et al. 2012, generalised):
-/// bin `u` counts `1 − strength + strength · max(0, p(u) − above) / (1 −
-/// above)` times in the similarity, with `p(u)` = `P(target | u)` learnt
-/// against the ring around the target (see [`crate::foreground`]), and
-/// the model is renormalised. `{ strength: 1, above: 0 }` is CBWH: a colour
-/// the surroundings share is dropped even where it is the target's own.
-/// `above` > 0 weighs only the target's distinctive colours up: at
-/// `{ strength: 0.5, above: 0.8 }` a colour at least four times as common
-/// in the target as around it counts up to twice as much as the rest (the
-/// default). Refreshed with the model.
-#[derive(Copy, Clone, Debug, PartialEq)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct BackgroundWeight {
-    /// In `[0, 1]`: 0 leaves the model as learnt.
-    pub strength: Real,
-    /// The odds `P(target | u)` above which a colour gains weight, in `[0, 0.95]`.
-    pub above: Real,
 }
 
 /// When the target model adapts (it never does with `alpha` = 0). Either

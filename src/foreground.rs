@@ -32,6 +32,44 @@ use crate::scalar::Real;
 /// cells; and 15 · 4096 cells fits a `u16` running sum.
 pub const LEVELS: u32 = 15;
 
+/// How the colour model's bins are weighted against the surroundings (the
+/// background-weighted histograms of CBWH, Ning et al. 2012, generalised):
+/// bin `u` counts `1 − strength + strength · max(0, p(u) − above) / (1 −
+/// above)` times in the similarity, with `p(u)` = `P(target | u)` learnt
+/// against the ring around the target (see [`crate::foreground`]), and
+/// the model is renormalised. `{ strength: 1, above: 0 }` is CBWH: a colour
+/// the surroundings share is dropped even where it is the target's own.
+/// `above` > 0 weighs only the target's distinctive colours up: at
+/// `{ strength: 0.5, above: 0.8 }` a colour at least four times as common
+/// in the target as around it counts up to twice as much as the rest (the
+/// default). Refreshed with the model.
+#[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct BackgroundWeight {
+    /// In `[0, 1]`: 0 leaves the model as learnt.
+    pub strength: Real,
+    /// The odds `P(target | u)` above which a colour gains weight, in `[0, 0.95]`.
+    pub above: Real,
+}
+
+/// The weight of each odds level `o` in `0..=LEVELS` under `b`, in
+/// sixteenths: `LEVELS · (1 − s) + s · max(0, o − above) · LEVELS /
+/// (LEVELS − above)`, at most 16 · 15 = 240 (for [`Model::reweight`]).
+#[inline]
+pub(crate) fn weights(b: BackgroundWeight) -> [u32; LEVELS as usize + 1] {
+    let levels = LEVELS as Real;
+    // `Config::validate` holds both in range; clamped again so that no
+    // caller can overflow the table or divide by `levels − above` = 0.
+    let s = crate::scalar::clamp(b.strength, 0.0, 1.0);
+    let above = crate::scalar::clamp(b.above, 0.0, 0.95) * levels;
+    let mut table = [0u32; LEVELS as usize + 1];
+    for (o, t) in table.iter_mut().enumerate() {
+        let gain = crate::scalar::max(o as Real - above, 0.0) * levels / (levels - above);
+        *t = (16.0 * ((1.0 - s) * levels + s * gain) + 0.5) as u32;
+    }
+    table
+}
+
 /// Per-bin `P(target | colour)` in `0..=LEVELS`, learnt from the target model
 /// and the histogram of a ring around the target.
 #[derive(Clone, Debug, PartialEq, Eq)]

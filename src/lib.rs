@@ -90,12 +90,13 @@ pub mod tracker;
 
 pub use boundary::BoundaryCue;
 pub use colour::Binning;
-pub use config::{BackgroundWeight, Config, Life, ModelUpdate, ShiftSearch, SizeSearch, TableMode, TemplateCue};
+pub use config::{Config, Life, ModelUpdate, ShiftSearch, SizeSearch, TableMode, TemplateCue};
 pub use correlation::CorrelationCue;
 pub use edges::{EDGE_SUPPORT_WORDS, EdgeCue, EdgeMap, EdgeParams, MAX_EDGE_BINS};
 pub use error::{ChromaPlane, ConfigError, Error, FrameError, ParamProblem, RegionError};
 pub use estimate::{Diagnostics, Estimate, Event, Trace, TrackState};
 pub use filter::{Dynamics, Particle, Resampling};
+pub use foreground::BackgroundWeight;
 pub use frame::{Frame, Plane};
 pub use geometry::{BoundingBox, Ellipse};
 pub use histogram::{Histogram, Model, SUPPORT_WORDS, Similarity};

@@ -26,6 +26,8 @@ pub(crate) const DEFAULT: Option<CorrelationCue> =
 
 /// Checks the settings; asking for the filter in a build without it is an
 /// error that names the feature.
+// Inlined into `Config::validate`, the one caller, as its other checks are.
+#[inline(always)]
 pub(crate) fn validate(settings: Option<CorrelationCue>) -> Result<(), ConfigError> {
     let Some(c) = settings else { return Ok(()) };
     if !cfg!(feature = "correlation") {

@@ -38,6 +38,7 @@ pub(crate) const fn quadrants(on: bool) -> bool {
 
 /// Asking for quadrants in a build without them is an error that names the
 /// feature.
+#[inline]
 pub(crate) fn validate_quadrants(on: bool) -> Result<(), ConfigError> {
     if on && !cfg!(feature = "quadrants") {
         return Err(not_built("quadrants", "quadrants"));

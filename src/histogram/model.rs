@@ -208,27 +208,14 @@ impl<const K: usize, const W: usize> Model<K, W> {
         }
     }
 
-    /// Weighs the model's bins by the odds `w` (`P(target | colour)` in
-    /// `0..=LEVELS` of [`crate::foreground`]) as `b` says (see
-    /// [`crate::BackgroundWeight`]): the roots become those of the weighted
-    /// bins, renormalised per segment, while `q` itself stays unweighted for
-    /// blending.
-    pub(crate) fn reweight(&mut self, w: &[u8; K], b: crate::BackgroundWeight) {
-        use crate::foreground::LEVELS;
-        let levels = LEVELS as Real;
-        // `Config::validate` holds both in range; clamped again so that no
-        // caller can overflow the table or divide by `levels − above` = 0.
-        let s = crate::scalar::clamp(b.strength, 0.0, 1.0);
-        let above = crate::scalar::clamp(b.above, 0.0, 0.95) * levels;
-        // Sixteenths of `LEVELS · (1 − s) + s · max(0, o − above) · LEVELS /
-        // (LEVELS − above)` for each odds level `o`: at most 16 · 15 = 240,
-        // so `q · weight` < 2^24 and a segment's sum (its q add up to about
-        // 2^16) fits easily in a u64.
-        let mut table = [0u32; LEVELS as usize + 1];
-        for (o, t) in table.iter_mut().enumerate() {
-            let gain = crate::scalar::max(o as Real - above, 0.0) * levels / (levels - above);
-            *t = (16.0 * ((1.0 - s) * levels + s * gain) + 0.5) as u32;
-        }
+    /// Weighs the model's bins by the odds `w`, each odds level `o` by
+    /// `table[o]` sixteenths (the surroundings' weights, see
+    /// [`crate::foreground::weights`]): the roots become those of the
+    /// weighted bins, renormalised per segment, while `q` itself stays
+    /// unweighted for blending. A weight is at most 240, so `q · weight` <
+    /// 2^24 and a segment's sum (its q add up to about 2^16) fits easily in
+    /// a u64.
+    pub(crate) fn reweight(&mut self, w: &[u8; K], table: &[u32]) {
         let len = self.segment_len();
         let weight = |i: usize| {
             let o = w.get(i % len).copied().unwrap_or(0) as usize;

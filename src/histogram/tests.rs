@@ -3,6 +3,7 @@ use super::walk::*;
 use super::*;
 use crate::colour::Binning;
 use crate::edges::EdgeMap;
+use crate::foreground::{BackgroundWeight, weights};
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
 use crate::pixel::{Gray8, PixelFormat, Rgb565, Rgb888};
@@ -561,7 +562,7 @@ fn reweighting_scales_each_bin_by_its_odds_as_configured() {
     let near = |got: u16, want: f64| (got as f64 - want).abs() <= 2.0;
     for (s, want1, want2) in [(0.5, 3344.0, 2364.9), (1.0, 4096.0, 0.0), (0.0, 2896.3, 2896.3)] {
         let mut m = plain.clone();
-        m.reweight(&odds, crate::BackgroundWeight { strength: s, above: 0.0 });
+        m.reweight(&odds, &weights(BackgroundWeight { strength: s, above: 0.0 }));
         assert!(near(m.sqrt_q[1], want1) && near(m.sqrt_q[2], want2), "s = {s}: {} {}", m.sqrt_q[1], m.sqrt_q[2]);
         assert_eq!(m.q, plain.q, "the bins blended later stay unweighted");
     }
@@ -572,7 +573,7 @@ fn reweighting_scales_each_bin_by_its_odds_as_configured() {
     p.add(3, 50);
     let (mut a, mut b) = (plain.clone(), plain.clone());
     a.blend(&p, 0.3);
-    let half = crate::BackgroundWeight { strength: 0.5, above: 0.0 };
+    let half = &weights(BackgroundWeight { strength: 0.5, above: 0.0 });
     a.reweight(&odds, half);
     b.blend_bins(&p, 0.3);
     b.reweight(&odds, half);
@@ -584,7 +585,7 @@ fn reweighting_scales_each_bin_by_its_odds_as_configured() {
     odds[2] = 12;
     for (above, want1, want2) in [(0.0, 2971.6, 2819.1), (0.8, 3344.0, 2364.9)] {
         let mut m = plain.clone();
-        m.reweight(&odds, crate::BackgroundWeight { strength: 0.5, above });
+        m.reweight(&odds, &weights(BackgroundWeight { strength: 0.5, above }));
         assert!(near(m.sqrt_q[1], want1) && near(m.sqrt_q[2], want2), "above {above}: {} {}", m.sqrt_q[1], m.sqrt_q[2]);
     }
 }

@@ -32,6 +32,7 @@ pub(crate) fn settings(on: bool) -> Option<On> {
 
 /// Asking for the test in a build without it is an error that names the
 /// feature.
+#[inline]
 pub(crate) fn validate(on: bool) -> Result<(), ConfigError> {
     if on && !cfg!(feature = "scene-motion") {
         return Err(not_built("scene_motion", "scene-motion"));

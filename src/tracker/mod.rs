@@ -175,10 +175,10 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
 
     /// Levels per colour channel of each histogram block (one per quadrant,
     /// or the first for the whole ellipse), as chosen at initialisation for
-    /// [`crate::Binning::Adaptive`]; `None` before initialisation and with
+    /// [`crate::colour::Binning::Adaptive`]; `None` before initialisation and with
     /// a fixed binning (whose levels are not chosen).
     pub fn colour_levels(&self) -> Option<[u8; 4]> {
-        let adaptive = self.config.binning == crate::Binning::Adaptive;
+        let adaptive = self.config.binning == crate::colour::Binning::Adaptive;
         self.target.as_ref().filter(|_| adaptive).map(|t| t.models.layout.levels)
     }
 
@@ -289,7 +289,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         if cfg.uses_surroundings() {
             m.fg.learn(frame, &e, (&m.layout, &m.colour), 1.0, &mut sc.colour);
             if let Some(b) = cfg.background_weight {
-                m.colour.reweight(m.fg.odds(), b);
+                m.colour.reweight(m.fg.odds(), &crate::foreground::weights(b));
             }
         }
         let models = &target.models;

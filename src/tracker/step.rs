@@ -350,7 +350,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
                 m.fg.learn(frame, &look.ellipse, (&m.layout, &m.colour), cfg.surroundings_rate, &mut scratch.colour);
             }
             if let Some(b) = cfg.background_weight {
-                m.colour.reweight(m.fg.odds(), b);
+                m.colour.reweight(m.fg.odds(), &crate::foreground::weights(b));
             }
         }
         if *state == TrackState::Tracking {
