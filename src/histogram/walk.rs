@@ -533,10 +533,11 @@ pub(crate) fn for_each_bin<F: FnMut(usize, usize, usize)>(
     visit: F,
 ) {
     // RGB565 camera frames with the default binning read bins straight
-    // from the packed bits: the loop chosen once per region.
-    let route = pixel::route::<SpanBins<'_, '_, F>>(binning == Binning::Rgb8x8x8, frame.format());
-    let mut visit = visit;
-    for_each_row(frame, e, lattice, |span| route.read(SpanBins { frame, span, binning, visit: &mut visit }));
+    // from the packed bits: a format dispatch per row, not per pixel.
+    let (packed, format, mut visit) = (binning == Binning::Rgb8x8x8, frame.format(), visit);
+    for_each_row(frame, e, lattice, |span| {
+        pixel::read_if(packed, format, SpanBins { frame, span, binning, visit: &mut visit })
+    });
 }
 
 /// One row of [`for_each_bin`], read by a loop per format or the general one.

@@ -96,59 +96,28 @@ pub(crate) fn read<R: RowReader>(format: PixelFormat, reader: R) -> R::Output {
 /// for a reader whose loops per format serve only some of its settings.
 #[inline(always)]
 pub(crate) fn read_if<R: RowReader>(specialise: bool, format: PixelFormat, reader: R) -> R::Output {
-    route::<R>(specialise, format).read(reader)
-}
-
-/// The loop a reader takes: its own for one of the [`PixelRead`] markers,
-/// or the general one.
-#[derive(Copy, Clone, Debug, PartialEq, Eq)]
-pub(crate) enum Route {
-    /// [`Rgb565`]'s.
-    Rgb565,
-    /// [`Rgb888`]'s.
-    Rgb888,
-    /// [`Yuv422`]'s.
-    Yuv422,
-    /// [`Gray8`]'s, for GRAY8 and the planar formats' luma plane.
-    Gray8,
-    /// The general loop.
-    General,
-}
-
-/// The loop readers of type `R` take for `format` ([`read_if`]'s choice),
-/// for a reader that runs once per row of a region: chosen once for the
-/// region, then [`Route::read`] on each row.
-#[inline(always)]
-pub(crate) fn route<R: RowReader>(specialise: bool, format: PixelFormat) -> Route {
     let loops = const { R::LOOPS };
     match format {
-        PixelFormat::Rgb565 if loops.rgb565.compiled() && specialise => Route::Rgb565,
-        PixelFormat::Rgb888 if loops.rgb888.compiled() && specialise => Route::Rgb888,
-        PixelFormat::Yuv422 if loops.yuv422.compiled() && specialise => Route::Yuv422,
-        PixelFormat::Gray8 if loops.gray8.compiled() && specialise => Route::Gray8,
-        // Their rows are their luma plane's.
-        PixelFormat::I420 | PixelFormat::Nv12 if loops.planar_luma.compiled() && specialise => Route::Gray8,
+        PixelFormat::Rgb565 if loops.rgb565.compiled() && specialise => reader.rows_of::<Rgb565>(),
+        PixelFormat::Rgb888 if loops.rgb888.compiled() && specialise => reader.rows_of::<Rgb888>(),
+        PixelFormat::Yuv422 if loops.yuv422.compiled() && specialise => reader.rows_of::<Yuv422>(),
+        // One arm for GRAY8 and the planar formats' luma plane, so that
+        // the loop they share is compiled once.
+        PixelFormat::Gray8 | PixelFormat::I420 | PixelFormat::Nv12
+            if specialise
+                && match format {
+                    PixelFormat::Gray8 => loops.gray8.compiled(),
+                    _ => loops.planar_luma.compiled(),
+                } =>
+        {
+            reader.rows_of::<Gray8>()
+        }
         PixelFormat::Rgb565
         | PixelFormat::Rgb888
         | PixelFormat::Yuv422
         | PixelFormat::Gray8
         | PixelFormat::I420
-        | PixelFormat::Nv12 => Route::General,
-    }
-}
-
-impl Route {
-    /// Runs `reader`'s loop for this route: one call site per loop, so each
-    /// is compiled once however many formats share it.
-    #[inline(always)]
-    pub(crate) fn read<R: RowReader>(self, reader: R) -> R::Output {
-        match self {
-            Route::Rgb565 => reader.rows_of::<Rgb565>(),
-            Route::Rgb888 => reader.rows_of::<Rgb888>(),
-            Route::Yuv422 => reader.rows_of::<Yuv422>(),
-            Route::Gray8 => reader.rows_of::<Gray8>(),
-            Route::General => reader.general(),
-        }
+        | PixelFormat::Nv12 => reader.general(),
     }
 }
 

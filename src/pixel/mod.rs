@@ -15,6 +15,6 @@ mod read;
 
 pub(crate) use convert::yuv_centred_to_rgb;
 pub use convert::{luma, rgb_to_rgb565, rgb_to_yuv, yuv_to_rgb};
-pub(crate) use dispatch::{Loop, Loops, RowReader, read, read_if, route};
+pub(crate) use dispatch::{Loop, Loops, RowReader, read, read_if};
 pub use format::{MAX_DIMENSION, PixelFormat};
 pub(crate) use read::{Gray8, PixelRead, Rgb565, Rgb888, Yuv422};
