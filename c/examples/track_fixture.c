@@ -89,7 +89,7 @@ int main(int argc, char **argv) {
 
     for (uint32_t n = 1; n <= frames; n++) {
         if (fread(record, 1, 20 + frame_bytes, f) != 20 + frame_bytes) {
-            fprintf(stderr, "%s: frame %u is truncated\n", argv[1], n);
+            fprintf(stderr, "%s: frame %u is truncated\n", argv[1], (unsigned)n);
             return 1;
         }
         pftrack_frame frame = {record + 20, frame_bytes, width, height, stride, format};
@@ -98,11 +98,11 @@ int main(int argc, char **argv) {
             pftrack_box box = {f32_at(record), f32_at(record + 4), f32_at(record + 8), f32_at(record + 12)};
             code = pftrack_init(&tracker, &frame, box, &est);
             if (code != PFTRACK_OK) return fail("init", code);
-            print_line(n, "tracking", "\"initialised\"", 1.0f, box);
+            print_line((unsigned)n, "tracking", "\"initialised\"", 1.0f, box);
         } else {
             code = pftrack_step(&tracker, &frame, &est);
             if (code != PFTRACK_OK) return fail("step", code);
-            print_line(n, state_name(est.state), event_json(est.event), est.confidence, est.bbox);
+            print_line((unsigned)n, state_name(est.state), event_json(est.event), est.confidence, est.bbox);
         }
     }
     free(record);

@@ -520,11 +520,23 @@ impl Write for Text {
     }
 }
 
-#[cfg(target_os = "none")]
+#[cfg(all(target_os = "none", not(feature = "panic-check")))]
 #[panic_handler]
 fn panic(_: &core::panic::PanicInfo) -> ! {
-    // Unreachable: the core has no reachable panic, and this layer none.
+    // Unreachable: the core has no reachable panic, and this layer none
+    // (the `panic-check` build proves it at link time).
     loop {}
+}
+
+#[cfg(all(target_os = "none", feature = "panic-check"))]
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    unsafe extern "C" {
+        /// Defined nowhere: a reachable panic fails the link, naming it.
+        fn pftrack_c_has_a_reachable_panic() -> !;
+    }
+    // SAFETY: never called in a program that links.
+    unsafe { pftrack_c_has_a_reachable_panic() }
 }
 
 #[cfg(test)]
