@@ -1,0 +1,162 @@
+"""The Python interface against the Rust one and against bad input.
+
+Every fixture's track must equal `track run`'s for the same seed, number
+for number (each value equal as a float32): the same core, reached from
+Python. The `track` binary is ../target/release/track, or $PFTRACK_TRACK.
+"""
+
+import json
+import os
+import struct
+import subprocess
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import pftrack
+
+ROOT = Path(__file__).resolve().parents[2]
+TRACK = Path(os.environ.get("PFTRACK_TRACK", ROOT / "target" / "release" / "track"))
+FORMATS = {1: "rgb565", 2: "rgb888", 3: "yuyv", 4: "gray8", 5: "i420", 6: "nv12"}
+FIXTURES = sorted((ROOT / "fixtures").glob("*.pft"))
+
+
+def f32(v):
+    return struct.unpack("<f", struct.pack("<f", v))[0]
+
+
+def read_fixture(path):
+    """The fixture's format name, size, stride, first box and frames (docs/fixtures.md)."""
+    data = path.read_bytes()
+    code, width, height, stride, count = struct.unpack_from("<HHHII", data, 10)
+    frame_bytes = stride * height
+    if code == 5:
+        frame_bytes += 2 * (stride // 2) * (height // 2)
+    if code == 6:
+        frame_bytes += stride * (height // 2)
+    box = struct.unpack_from("<4f", data, 32)
+    frames = [data[32 + i * (20 + frame_bytes) + 20 : 32 + (i + 1) * (20 + frame_bytes)] for i in range(count)]
+    return FORMATS[code], width, height, stride, box, frames
+
+
+def python_track(path, seed):
+    fmt, w, h, stride, box, frames = read_fixture(path)
+    raw = (fmt, w, h, stride)
+    t = pftrack.Tracker(seed=seed)
+    assert t.init(frames[0], box, raw=raw)
+    rows = [(1, "tracking", "initialised", 1.0, tuple(map(f32, box)))]
+    for n, frame in enumerate(frames[1:], 2):
+        t.update(frame, raw=raw)
+        e = t.estimate
+        rows.append((n, e.state, e.event, f32(e.confidence), tuple(map(f32, e.bbox))))
+    return rows
+
+
+def rust_track(path, seed):
+    if not TRACK.exists():
+        pytest.fail(f"{TRACK} missing: cargo build --release -p host-tests --bin track")
+    box = ",".join(repr(v) for v in read_fixture(path)[4])
+    out = subprocess.run(
+        [str(TRACK), "run", str(path), "--box", box, "--seed", str(seed)], capture_output=True, text=True, check=True
+    ).stdout
+    rows = []
+    for line in out.splitlines():
+        r = json.loads(line)
+        rows.append((r["frame"], r["state"], r["event"], f32(r["confidence"]), tuple(map(f32, r["box"]))))
+    return rows
+
+
+@pytest.mark.parametrize("path", FIXTURES, ids=lambda p: p.stem)
+def test_every_fixture_tracks_as_the_rust_tool_does(path):
+    # Reason: a cross-check of two interfaces to one core on the same
+    # frames and seed.
+    assert python_track(path, 1) == rust_track(path, 1)
+
+
+def square(n, rgb=True, size=(120, 160)):
+    """A grey frame with a red 20x20 square at (40 + 2n, 50); BGR unless rgb."""
+    px = np.full(size + (3,), 60, np.uint8)
+    px[50:70, 40 + 2 * n : 60 + 2 * n] = (220, 30, 30) if rgb else (30, 30, 220)
+    return px
+
+
+def test_bgr_is_opencvs_order_and_rgb_a_flag():
+    # Reason: the same scene in BGR (OpenCV's order, the default) and in
+    # RGB with rgb=True is the same frame to the tracker.
+    a, b = pftrack.Tracker(seed=3), pftrack.Tracker(seed=3, rgb=True)
+    a.init(square(0, rgb=False), (40, 50, 20, 20))
+    b.init(square(0, rgb=True), (40, 50, 20, 20))
+    for n in range(1, 8):
+        assert a.update(square(n, rgb=False)) == b.update(square(n, rgb=True))
+    ok, (x, y, w, h) = a.update(square(8, rgb=False))
+    # The square's truth: left edge 56, top 50, 20x20.
+    assert ok and abs(x - 56) < 3 and abs(y - 50) < 3
+
+
+def test_grey_and_sliced_arrays():
+    # Reason: an HxW array is a grey frame, and a view with strides (a
+    # slice of a larger array) reads as its own pixels: equal to a copy.
+    grey = square(0)[:, :, 0].copy()
+    big = np.zeros((240, 320, 3), np.uint8)
+    big[10:130, 20:180] = square(0)
+    view = big[10:130, 20:180]
+    assert not view.flags["C_CONTIGUOUS"]
+    for frame in (grey, view):
+        t, u = pftrack.Tracker(seed=5), pftrack.Tracker(seed=5)
+        t.init(frame, (40, 50, 20, 20))
+        u.init(np.ascontiguousarray(frame), (40, 50, 20, 20))
+        assert t.update(frame) == u.update(np.ascontiguousarray(frame))
+
+
+def test_bad_input_raises_not_crashes():
+    t = pftrack.Tracker()
+    with pytest.raises(ValueError, match="not initialised"):
+        t.update(square(0))
+    with pytest.raises(TypeError):
+        t.init(square(0).astype(np.float32), (40, 50, 20, 20))
+    with pytest.raises(TypeError):
+        t.init(np.zeros((10, 10, 4), np.uint8), (1, 1, 5, 5))
+    with pytest.raises(TypeError):
+        t.init("a string", (1, 1, 5, 5))
+    with pytest.raises(ValueError, match="box"):
+        t.init(square(0), (500, 500, 20, 20))
+    with pytest.raises(ValueError, match="box"):
+        t.init(square(0), (40, 50, float("nan"), 20))
+    with pytest.raises(ValueError, match="frame"):
+        t.init(b"\x00" * 10, (1, 1, 5, 5), raw=("gray8", 64, 48, 64))
+    with pytest.raises(ValueError, match="unknown format"):
+        t.init(b"\x00" * 64 * 48, (1, 1, 5, 5), raw=("bgr", 64, 48, 64))
+    with pytest.raises(ValueError, match="lost_below"):
+        pftrack.Tracker(lost_below=2.0)
+    with pytest.raises(TypeError, match="unknown setting"):
+        pftrack.Tracker(sigma=0.2)
+    with pytest.raises(ValueError, match="particles"):
+        pftrack.Tracker(particles=50)
+    t.init(square(0), (40, 50, 20, 20))
+    with pytest.raises(ValueError, match="initialised on 160x120"):
+        t.update(square(0, size=(60, 80)))
+    assert t.update(square(1))[0], "an error leaves the tracker as it was"
+
+
+def test_two_trackers_in_two_threads_give_their_own_tracks():
+    # Reason: `update` releases the GIL; trackers in threads must still
+    # give exactly the tracks they give one after the other.
+    frames = [square(n) for n in range(30)]
+
+    def run(seed, out):
+        t = pftrack.Tracker(seed=seed)
+        t.init(frames[0], (40, 50, 20, 20))
+        out.extend(t.update(f) for f in frames[1:])
+
+    alone = {s: [] for s in (1, 2)}
+    for s in alone:
+        run(s, alone[s])
+    together = {s: [] for s in (1, 2)}
+    threads = [threading.Thread(target=run, args=(s, together[s])) for s in together]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    assert together == alone
