@@ -34,10 +34,7 @@ struct Estimate {
 impl Estimate {
     fn __repr__(&self) -> String {
         let event = self.event.map_or_else(|| "None".to_string(), |e| format!("{e:?}"));
-        format!(
-            "Estimate(bbox={:?}, confidence={}, state={:?}, event={event})",
-            self.bbox, self.confidence, self.state
-        )
+        format!("Estimate(bbox={:?}, confidence={}, state={:?}, event={event})", self.bbox, self.confidence, self.state)
     }
 }
 
