@@ -174,14 +174,8 @@ struct CellRow<'f, 'r, I> {
 
 impl<'c, I: Iterator<Item = &'c [usize]>> RowReader for CellRow<'_, '_, I> {
     type Output = ();
-    // The camera formats, where a loop of their own is worth its code.
-    const LOOPS: Loops = Loops {
-        rgb565: Loop::Fast,
-        rgb888: Loop::General,
-        yuv422: Loop::General,
-        gray8: Loop::Fast,
-        planar_luma: Loop::Fast,
-    };
+    // Loops of its own where they save time, not in the lean build.
+    const LOOPS: Loops = Loops::camera_luma(Loop::Fast);
 
     #[inline(always)]
     fn rows_of<P: PixelRead>(self) {

@@ -385,6 +385,27 @@ unsafe fn with_frame<T>(
     finish(slot, r)
 }
 
+fn box_of(b: pftrack_box) -> BoundingBox {
+    BoundingBox::new(b.x, b.y, b.w, b.h)
+}
+
+/// The code of `r`, its estimate written to `out` (if not null) on success.
+///
+/// # Safety
+/// `out` is null or writable.
+unsafe fn report(r: Result<pftrack::Estimate, i32>, out: *mut pftrack_estimate) -> i32 {
+    match r {
+        Ok(e) => {
+            if !out.is_null() {
+                // SAFETY: writable (the caller's promise).
+                unsafe { out.write(estimate_of(&e)) };
+            }
+            PFTRACK_OK
+        }
+        Err(code) => code,
+    }
+}
+
 /// Learns the target in `bbox` of `frame` and tracks it from there; call it
 /// again at any time to re-initialise. Writes the first estimate to `out`
 /// (if not null).
@@ -400,18 +421,10 @@ pub unsafe extern "C" fn pftrack_init(
     bbox: pftrack_box,
     out: *mut pftrack_estimate,
 ) -> i32 {
-    let b = BoundingBox::new(bbox.x, bbox.y, bbox.w, bbox.h);
     // SAFETY: forwarded from the caller.
-    match unsafe { with_frame(t, frame, |tr, f| tr.init(f, b)) } {
-        Ok(e) => {
-            if !out.is_null() {
-                // SAFETY: writable (the caller's promise).
-                unsafe { out.write(estimate_of(&e)) };
-            }
-            PFTRACK_OK
-        }
-        Err(code) => code,
-    }
+    let r = unsafe { with_frame(t, frame, |tr, f| tr.init(f, box_of(bbox))) };
+    // SAFETY: forwarded from the caller.
+    unsafe { report(r, out) }
 }
 
 /// Learns the target in `bbox` of `frame`, then searches for it in the
@@ -425,9 +438,8 @@ pub unsafe extern "C" fn pftrack_search(
     frame: *const pftrack_frame,
     bbox: pftrack_box,
 ) -> i32 {
-    let b = BoundingBox::new(bbox.x, bbox.y, bbox.w, bbox.h);
     // SAFETY: forwarded from the caller.
-    match unsafe { with_frame(t, frame, |tr, f| tr.search(f, b)) } {
+    match unsafe { with_frame(t, frame, |tr, f| tr.search(f, box_of(bbox))) } {
         Ok(()) => PFTRACK_OK,
         Err(code) => code,
     }
@@ -444,16 +456,9 @@ pub unsafe extern "C" fn pftrack_step(
     out: *mut pftrack_estimate,
 ) -> i32 {
     // SAFETY: forwarded from the caller.
-    match unsafe { with_frame(t, frame, |tr, f| tr.step(f)) } {
-        Ok(e) => {
-            if !out.is_null() {
-                // SAFETY: writable (the caller's promise).
-                unsafe { out.write(estimate_of(&e)) };
-            }
-            PFTRACK_OK
-        }
-        Err(code) => code,
-    }
+    let r = unsafe { with_frame(t, frame, |tr, f| tr.step(f)) };
+    // SAFETY: forwarded from the caller.
+    unsafe { report(r, out) }
 }
 
 /// The name of a code, as a static NUL-terminated string.

@@ -529,14 +529,8 @@ struct WindowRow<'f, 'r> {
 
 impl RowReader for WindowRow<'_, '_> {
     type Output = ();
-    // The camera formats; the others read a pixel at a time.
-    const LOOPS: Loops = Loops {
-        rgb565: Loop::Always,
-        rgb888: Loop::General,
-        yuv422: Loop::General,
-        gray8: Loop::Always,
-        planar_luma: Loop::Always,
-    };
+    // Three windows a frame: loops of their own in every build.
+    const LOOPS: Loops = Loops::camera_luma(Loop::Always);
 
     fn rows_of<P: PixelRead>(self) {
         let Some(px) = P::pixels(self.row) else { return };

@@ -187,14 +187,8 @@ struct Differences<'f, 'r> {
 
 impl RowReader for Differences<'_, '_> {
     type Output = (u32, u32);
-    // The camera formats, where a loop of their own is worth its code.
-    const LOOPS: Loops = Loops {
-        rgb565: Loop::Fast,
-        rgb888: Loop::General,
-        yuv422: Loop::General,
-        gray8: Loop::Fast,
-        planar_luma: Loop::Fast,
-    };
+    // Loops of its own where they save time, not in the lean build.
+    const LOOPS: Loops = Loops::camera_luma(Loop::Fast);
 
     #[inline(always)]
     fn rows_of<P: PixelRead>(self) -> (u32, u32) {

@@ -52,8 +52,9 @@ impl Loop {
 }
 
 /// The formats a reader gives a loop of its own. Each reader spells out
-/// every field, so a new pixel format does not compile until every reader
-/// has said what it does with it.
+/// every field, or takes a kind of reader that does ([`Loops::camera_luma`]),
+/// so a new pixel format does not compile until every reader has said what
+/// it does with it.
 #[derive(Copy, Clone, Debug)]
 pub(crate) struct Loops {
     /// [`PixelFormat::Rgb565`].
@@ -69,6 +70,16 @@ pub(crate) struct Loops {
     /// is for readers of luma only. A reader of colour needs the chroma
     /// planes and says [`Loop::General`].
     pub planar_luma: Loop,
+}
+
+impl Loops {
+    /// A reader of luma with loops of its own, worth `worth`, for the
+    /// formats whose pixels a row holds whole and cameras deliver (RGB565,
+    /// GRAY8 and the planar formats' luma plane); RGB888 and YUV 4:2:2 read
+    /// a pixel at a time.
+    pub(crate) const fn camera_luma(worth: Loop) -> Loops {
+        Loops { rgb565: worth, rgb888: Loop::General, yuv422: Loop::General, gray8: worth, planar_luma: worth }
+    }
 }
 
 /// A loop over a frame's rows, compiled once per format its [`Loops`]
