@@ -11,16 +11,15 @@ mod step;
 mod tests;
 
 use crate::config::{Config, Life, TableMode};
-use crate::edges::EdgeMap;
 use crate::edges::{EDGE_SUPPORT_WORDS, MAX_EDGE_BINS};
 use crate::error::{ConfigError, Error, ParamProblem, RegionError};
 use crate::estimate::{Diagnostics, Estimate, TrackState};
 use crate::filter::Particle;
-use crate::foreground::{Foreground, ForegroundMap};
+use crate::foreground::Foreground;
 use crate::frame::Frame;
 use crate::geometry::{BoundingBox, Ellipse};
-use crate::histogram::{Clear, Histogram, Layout, Model, PlainModel};
-use crate::region::{Extents, Lattice};
+use crate::histogram::{Clear, Layout, Model, PlainModel};
+use crate::region::Extents;
 use crate::scalar::{Real, sqrt};
 use crate::table::{Bins, Table};
 pub use confidence::on_target;
@@ -74,12 +73,19 @@ pub struct Tracker<
     R = Xoshiro128PlusPlus,
     const T: usize = 0,
 > {
+    track: Track<N, K, R, T>,
+    scratch: Scratch<K, E>,
+}
+
+/// One target's state: what a [`Tracker`] keeps apart from its working
+/// memory, so that the members of a [`crate::Group`] share one.
+#[derive(Clone, Debug)]
+pub(crate) struct Track<const N: usize, const K: usize, R, const T: usize> {
     config: Config,
     rng: R,
     particles: [Particle; N],
     /// Normalised weights of `particles` after a step.
     weights: [Real; N],
-    scratch: Scratch<K, E>,
     target: Option<Target<K>>,
     /// The likelihood table (table mode only; zero-sized when `T` is 0).
     table: Table<T>,
@@ -102,6 +108,94 @@ impl<const N: usize, const K: usize, const E: usize, const T: usize> Tracker<N, 
 impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tracker<N, K, E, R, T> {
     /// A tracker drawing its randomness from `rng`.
     pub fn with_rng(config: Config, rng: R) -> Result<Self, Error> {
+        Ok(Tracker { track: Track::new(config, rng)?, scratch: Scratch::new() })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &Config {
+        &self.track.config
+    }
+
+    /// The signals behind the last step's confidence.
+    pub fn diagnostics(&self) -> Diagnostics {
+        self.track.diag
+    }
+
+    /// The current state.
+    pub fn state(&self) -> TrackState {
+        self.track.state
+    }
+
+    /// The particles after the last step (for drawing and diagnostics).
+    pub fn particles(&self) -> &[Particle; N] {
+        &self.track.particles
+    }
+
+    /// The particles' normalised weights after the last step.
+    pub fn weights(&self) -> &[Real; N] {
+        &self.track.weights
+    }
+
+    /// The colour model, once initialised.
+    pub fn model(&self) -> Option<&Model<K>> {
+        self.track.target.as_ref().map(|t| &t.models.colour)
+    }
+
+    /// The edge-orientation model, once initialised with the edge cue on and
+    /// a target that has edges.
+    pub fn edge_model(&self) -> Option<&Model<MAX_EDGE_BINS, EDGE_SUPPORT_WORDS>> {
+        self.track.target.as_ref().and_then(|t| t.models.edge.as_ref())
+    }
+
+    /// Levels per colour channel of each histogram block (one per quadrant,
+    /// or the first for the whole ellipse), as chosen at initialisation for
+    /// [`crate::colour::Binning::Adaptive`]; `None` before initialisation and with
+    /// a fixed binning (whose levels are not chosen).
+    pub fn colour_levels(&self) -> Option<[u8; 4]> {
+        let adaptive = self.track.config.binning == crate::colour::Binning::Adaptive;
+        self.track.target.as_ref().filter(|_| adaptive).map(|t| t.models.layout.levels)
+    }
+
+    /// The appearance threshold learnt from the background, once initialised.
+    pub fn appearance_threshold(&self) -> Option<Real> {
+        self.track.target.as_ref().map(|t| t.threshold)
+    }
+
+    /// The edge cue's gradient threshold chosen for the target, once
+    /// initialised with the cue on: [`crate::EdgeCue::threshold`], or lower
+    /// for a target with fewer strong gradients than
+    /// [`crate::EdgeCue::strong_percent`] asks.
+    pub fn edge_threshold(&self) -> Option<u16> {
+        self.track.config.edges.and(self.track.target.as_ref().map(|t| t.edge_threshold))
+    }
+
+    /// Learns the target from `bbox` in `frame` and starts tracking it there.
+    ///
+    /// Calling it again at any time re-initialises the tracker on a new box
+    /// (and may change resolution). The background statistics for the
+    /// appearance test are measured on the same frame, away from the box.
+    pub fn init(&mut self, frame: &Frame<'_>, bbox: BoundingBox) -> Result<Estimate, Error> {
+        self.track.init(&mut self.scratch, frame, bbox)
+    }
+
+    /// Learns the target from `bbox` in a reference `frame`, then searches
+    /// for it in the frames that follow (automatic initialisation, first paper):
+    /// particles are spread over the frame, and tracking starts once more
+    /// than `b · N` of them see the target.
+    pub fn search(&mut self, frame: &Frame<'_>, bbox: BoundingBox) -> Result<(), Error> {
+        self.track.search(&mut self.scratch, frame, bbox)
+    }
+
+    /// Grid spacing of the last likelihood table, in pixels (table mode).
+    pub fn table_spacing(&self) -> Option<usize> {
+        self.track.config.table.map(|_| self.track.table.spacing() as usize)
+    }
+}
+
+impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
+    /// A target's state, before any box: validates `config` against the
+    /// capacities.
+    pub(crate) fn new(config: Config, rng: R) -> Result<Self, Error> {
         const {
             assert!(N >= 2, "a particle filter needs at least 2 particles");
             assert!(N <= u16::MAX as usize, "at most 65535 particles");
@@ -116,18 +210,11 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         if config.table.is_some() && T == 0 {
             return Err(ConfigError { field: "table", problem: ParamProblem::OutOfRange }.into());
         }
-        Ok(Tracker {
+        Ok(Track {
             config,
             rng,
             particles: [Particle::default(); N],
             weights: [1.0 / N as Real; N],
-            scratch: Scratch {
-                colour: Histogram::new(),
-                edge: Histogram::new(),
-                map: EdgeMap::new(),
-                lattice: Lattice::FULL,
-                fgmap: ForegroundMap::new(),
-            },
             table: Table::new(),
             target: None,
             state: TrackState::Searching,
@@ -137,71 +224,18 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         })
     }
 
-    /// The configuration.
-    pub fn config(&self) -> &Config {
-        &self.config
-    }
-
-    /// The signals behind the last step's confidence.
-    pub fn diagnostics(&self) -> Diagnostics {
-        self.diag
-    }
-
-    /// The current state.
-    pub fn state(&self) -> TrackState {
-        self.state
-    }
-
-    /// The particles after the last step (for drawing and diagnostics).
-    pub fn particles(&self) -> &[Particle; N] {
-        &self.particles
-    }
-
-    /// The particles' normalised weights after the last step.
-    pub fn weights(&self) -> &[Real; N] {
-        &self.weights
-    }
-
-    /// The colour model, once initialised.
-    pub fn model(&self) -> Option<&Model<K>> {
-        self.target.as_ref().map(|t| &t.models.colour)
-    }
-
-    /// The edge-orientation model, once initialised with the edge cue on and
-    /// a target that has edges.
-    pub fn edge_model(&self) -> Option<&Model<MAX_EDGE_BINS, EDGE_SUPPORT_WORDS>> {
-        self.target.as_ref().and_then(|t| t.models.edge.as_ref())
-    }
-
-    /// Levels per colour channel of each histogram block (one per quadrant,
-    /// or the first for the whole ellipse), as chosen at initialisation for
-    /// [`crate::colour::Binning::Adaptive`]; `None` before initialisation and with
-    /// a fixed binning (whose levels are not chosen).
-    pub fn colour_levels(&self) -> Option<[u8; 4]> {
-        let adaptive = self.config.binning == crate::colour::Binning::Adaptive;
-        self.target.as_ref().filter(|_| adaptive).map(|t| t.models.layout.levels)
-    }
-
-    /// The appearance threshold learnt from the background, once initialised.
-    pub fn appearance_threshold(&self) -> Option<Real> {
-        self.target.as_ref().map(|t| t.threshold)
-    }
-
-    /// The edge cue's gradient threshold chosen for the target, once
-    /// initialised with the cue on: [`crate::EdgeCue::threshold`], or lower
-    /// for a target with fewer strong gradients than
-    /// [`crate::EdgeCue::strong_percent`] asks.
-    pub fn edge_threshold(&self) -> Option<u16> {
-        self.config.edges.and(self.target.as_ref().map(|t| t.edge_threshold))
-    }
-
     /// Learns the target from `bbox` in `frame` and starts tracking it there.
     ///
     /// Calling it again at any time re-initialises the tracker on a new box
     /// (and may change resolution). The background statistics for the
     /// appearance test are measured on the same frame, away from the box.
-    pub fn init(&mut self, frame: &Frame<'_>, bbox: BoundingBox) -> Result<Estimate, Error> {
-        self.learn(frame, &bbox)?;
+    pub(crate) fn init<const E: usize>(
+        &mut self,
+        scratch: &mut Scratch<K, E>,
+        frame: &Frame<'_>,
+        bbox: BoundingBox,
+    ) -> Result<Estimate, Error> {
+        self.learn(scratch, frame, &bbox)?;
         let e = Ellipse::from_box(&bbox);
         self.particles = [Particle::at(&e); N];
         self.weights = [1.0 / N as Real; N];
@@ -215,8 +249,13 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     /// for it in the frames that follow (automatic initialisation, first paper):
     /// particles are spread over the frame, and tracking starts once more
     /// than `b · N` of them see the target.
-    pub fn search(&mut self, frame: &Frame<'_>, bbox: BoundingBox) -> Result<(), Error> {
-        self.learn(frame, &bbox)?;
+    pub(crate) fn search<const E: usize>(
+        &mut self,
+        scratch: &mut Scratch<K, E>,
+        frame: &Frame<'_>,
+        bbox: BoundingBox,
+    ) -> Result<(), Error> {
+        self.learn(scratch, frame, &bbox)?;
         let (w, h) = (frame.width(), frame.height());
         let (hx, hy) = self.target.as_ref().map_or((1.0, 1.0), |t| t.half_axes);
         for p in self.particles.iter_mut() {
@@ -238,9 +277,14 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     /// a cue's working memory (the correlation filter's spectrum) joins the
     /// stack.
     #[inline(never)]
-    fn learn(&mut self, frame: &Frame<'_>, bbox: &BoundingBox) -> Result<(), Error> {
+    fn learn<const E: usize>(
+        &mut self,
+        sc: &mut Scratch<K, E>,
+        frame: &Frame<'_>,
+        bbox: &BoundingBox,
+    ) -> Result<(), Error> {
         bbox.validate(frame.width(), frame.height())?;
-        let Tracker { config: cfg, scratch: sc, target: slot, .. } = self;
+        let Track { config: cfg, target: slot, .. } = self;
         let cfg = &*cfg;
         let (fw, fh) = (frame.width(), frame.height());
         let e = Ellipse::from_box(bbox);
@@ -335,21 +379,16 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     }
 }
 
-impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tracker<N, K, E, R, T> {
+impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
     /// Fills the likelihood table over the particles' centres.
-    fn fill_table(&mut self, frame: &Frame<'_>, mode: TableMode) {
+    fn fill_table<const E: usize>(&mut self, scratch: &Scratch<K, E>, frame: &Frame<'_>, mode: TableMode) {
         let Some(target) = self.target.as_ref() else { return };
         let cfg = &self.config;
         let (hx, hy) = target.half_axes;
         let Some(ext) = Extents::new(&Ellipse { cx: 0.0, cy: 0.0, hx, hy }) else { return };
-        let map = if target.models.edge.is_some() { Some(&self.scratch.map) } else { None };
-        let bins = Bins {
-            frame,
-            binning: cfg.binning,
-            levels: target.models.layout.levels[0],
-            map,
-            lattice: self.scratch.lattice,
-        };
+        let map = if target.models.edge.is_some() { Some(&scratch.map) } else { None };
+        let bins =
+            Bins { frame, binning: cfg.binning, levels: target.models.layout.levels[0], map, lattice: scratch.lattice };
         let (mut x0, mut y0, mut x1, mut y1) = (i32::MAX, i32::MAX, i32::MIN, i32::MIN);
         for p in self.particles.iter() {
             let (x, y) = (crate::region::floor(p.x), crate::region::floor(p.y));
@@ -362,10 +401,5 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         let spacing = mode.spacing as i32;
         let edge = target.models.edge.as_ref();
         self.table.fill(&bins, &ext, &target.models.colour, edge, cfg.combination, area, spacing);
-    }
-
-    /// Grid spacing of the last likelihood table, in pixels (table mode).
-    pub fn table_spacing(&self) -> Option<usize> {
-        self.config.table.map(|_| self.table.spacing() as usize)
     }
 }

@@ -81,7 +81,7 @@ pub(super) struct Seen {
 /// Working memory for observing regions: the histograms of the last region
 /// observed, this frame's sampling lattice and its edge map.
 #[derive(Clone, Debug)]
-pub(super) struct Scratch<const K: usize, const E: usize> {
+pub(crate) struct Scratch<const K: usize, const E: usize> {
     pub(super) colour: Histogram<K>,
     pub(super) edge: Histogram<MAX_EDGE_BINS>,
     pub(super) map: EdgeMap<E>,
@@ -96,6 +96,17 @@ pub(super) struct Scratch<const K: usize, const E: usize> {
 pub(super) const FG_CELLS: usize = 4096;
 
 impl<const K: usize, const E: usize> Scratch<K, E> {
+    /// Empty working memory.
+    pub(crate) fn new() -> Self {
+        Scratch {
+            colour: Histogram::new(),
+            edge: Histogram::new(),
+            map: EdgeMap::new(),
+            lattice: Lattice::FULL,
+            fgmap: ForegroundMap::new(),
+        }
+    }
+
     /// Histograms of ellipse `e`, left in `self` (for a model update), with
     /// the colour bins `clear` says exact.
     pub(super) fn observe(&mut self, frame: &Frame<'_>, e: &Ellipse, layout: &Layout, edges: bool, clear: Clear<'_>) {

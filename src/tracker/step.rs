@@ -3,7 +3,7 @@
 use super::confidence::{SPEED_RATE, TYPICAL_CONTRAST, on_target};
 use super::scratch::*;
 use super::search::*;
-use super::{ScalePrior, Tracker};
+use super::{ScalePrior, Track, Tracker};
 use crate::config::{Life, ModelUpdate};
 use crate::error::Error;
 use crate::estimate::{Diagnostics, Estimate, Event, TrackState};
@@ -22,7 +22,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     /// The frame must have the size the tracker was initialised with; any
     /// pixel format may be used.
     pub fn step(&mut self, frame: &Frame<'_>) -> Result<Estimate, Error> {
-        self.step_inner(frame, None)
+        self.track.step_inner(&mut self.scratch, frame, None, &[])
     }
 
     /// [`Tracker::step`] with an external size measurement for this frame
@@ -31,31 +31,39 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     /// the tracker is left as it was.
     pub fn step_with_prior(&mut self, frame: &Frame<'_>, prior: ScalePrior) -> Result<Estimate, Error> {
         prior.validate()?;
-        self.step_inner(frame, Some(prior))
+        self.track.step_inner(&mut self.scratch, frame, Some(prior), &[])
     }
+}
 
+impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
     /// One step, as its phases: predict where the target may be, observe
     /// each hypothesis, weigh them, estimate (and size) the target, decide
     /// its state, and adapt the models.
-    pub(super) fn step_inner(&mut self, frame: &Frame<'_>, prior: Option<ScalePrior>) -> Result<Estimate, Error> {
+    pub(crate) fn step_inner<const E: usize>(
+        &mut self,
+        scratch: &mut Scratch<K, E>,
+        frame: &Frame<'_>,
+        prior: Option<ScalePrior>,
+        held: &[Ellipse],
+    ) -> Result<Estimate, Error> {
         let target = self.target.as_ref().ok_or(Error::NotInitialised)?;
         let size = (frame.width(), frame.height());
         if size != target.frame {
             return Err(Error::FrameSizeChanged { expected: target.frame, got: size });
         }
-        self.predict(frame, prior);
-        let observed = self.observe(frame);
+        self.predict(scratch, frame, prior);
+        let observed = self.observe(scratch, frame, held);
         let sigma = self.weigh(observed.d2_max);
         // An external size measurement, or the table's fixed size, decides
         // the size: no search then.
         let sized = prior.is_some() || (T > 0 && self.config.table.is_some());
-        let look = self.estimate(frame, &observed, !sized);
+        let look = self.estimate(scratch, frame, &observed, !sized);
         // Measured on every frame, so that its running means stay current.
         let stuck = self.cues.miss(&self.config, frame, &look.ellipse, self.state == TrackState::Tracking);
         let was_tracking = self.state == TrackState::Tracking;
         let event = self.life_cycle(look.found && !stuck);
         self.follow(&look.ellipse, was_tracking);
-        let model_updated = self.adapt(frame, &look, event);
+        let model_updated = self.adapt(scratch, frame, &look, event);
         Ok(Estimate {
             ellipse: look.ellipse,
             confidence: look.confidence,
@@ -71,8 +79,13 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     /// Resamples in proportion to the last step's weights, moves every
     /// particle by the dynamics, and, while the target is not tracked,
     /// re-draws a share of them to keep exploring.
-    pub(super) fn predict(&mut self, frame: &Frame<'_>, prior: Option<ScalePrior>) {
-        let Tracker { config: cfg, rng, particles, weights, scratch, target, state, .. } = self;
+    pub(super) fn predict<const E: usize>(
+        &mut self,
+        scratch: &mut Scratch<K, E>,
+        frame: &Frame<'_>,
+        prior: Option<ScalePrior>,
+    ) {
+        let Track { config: cfg, rng, particles, weights, target, state, .. } = self;
         let Some(target) = target.as_ref() else { return };
         let (w, h) = (frame.width(), frame.height());
         let bounds = Bounds { width: w as Real, height: h as Real, min_half: cfg.min_half_axis };
@@ -114,10 +127,15 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     }
 
     /// Each particle's similarity with the models, left in `weights`.
-    pub(super) fn observe(&mut self, frame: &Frame<'_>) -> Observed {
+    pub(super) fn observe<const E: usize>(
+        &mut self,
+        scratch: &mut Scratch<K, E>,
+        frame: &Frame<'_>,
+        _held: &[Ellipse],
+    ) -> Observed {
         let size = (frame.width(), frame.height());
         let table = if T > 0 { self.config.table } else { None };
-        let Tracker { config: cfg, particles, scratch, target, .. } = self;
+        let Track { config: cfg, particles, target, .. } = self;
         let Some(target) = target.as_ref() else { return Observed::default() };
         // Edges first, once, over the region the particles cover.
         let rect = target.models.edge.is_some().then(|| {
@@ -132,9 +150,9 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
         // `T > 0` is known at compile time: without a table, none of its
         // code is built into the tracker (it would take flash for nothing).
         if let Some(mode) = table {
-            self.fill_table(frame, mode);
+            self.fill_table(scratch, frame, mode);
         }
-        let Tracker { config: cfg, particles, weights, scratch, target, table: tab, .. } = self;
+        let Track { config: cfg, particles, weights, target, table: tab, .. } = self;
         let Some(target) = target.as_ref() else { return Observed::default() };
         // The boundary scores (in 1/16 Sobel units; at most 1443 · 16 <
         // 2^16) wait until the best one, their normaliser, is known.
@@ -194,8 +212,14 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
 
     /// The weighted mean state, sized against the surroundings, and how it
     /// compares with the models.
-    pub(super) fn estimate(&mut self, frame: &Frame<'_>, observed: &Observed, search: bool) -> Look {
-        let Tracker { config: cfg, particles, weights, scratch, target, state, diag, cues, .. } = self;
+    pub(super) fn estimate<const E: usize>(
+        &mut self,
+        scratch: &mut Scratch<K, E>,
+        frame: &Frame<'_>,
+        observed: &Observed,
+        search: bool,
+    ) -> Look {
+        let Track { config: cfg, particles, weights, target, state, diag, cues, .. } = self;
         let mut ellipse = mean_state(particles, weights).ellipse();
         // The texture cue first, so that the searches and the confidence
         // measure the box where it leaves it.
@@ -297,8 +321,14 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
 
     /// Adapts the models on steady, trustworthy tracking frames; returns
     /// whether they were updated.
-    pub(super) fn adapt(&mut self, frame: &Frame<'_>, look: &Look, event: Option<Event>) -> bool {
-        let Tracker { config: cfg, scratch, target, state, misses, cues, .. } = self;
+    pub(super) fn adapt<const E: usize>(
+        &mut self,
+        scratch: &mut Scratch<K, E>,
+        frame: &Frame<'_>,
+        look: &Look,
+        event: Option<Event>,
+    ) -> bool {
+        let Track { config: cfg, target, state, misses, cues, .. } = self;
         let Some(target) = target.as_mut() else { return false };
         cues.adapt(cfg, frame, &look.ellipse, look.confidence);
         let steady = *state == TrackState::Tracking && event.is_none() && *misses == 0 && cfg.alpha > 0.0;

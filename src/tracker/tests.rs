@@ -50,7 +50,7 @@ fn the_shift_search_climbs_onto_the_target() {
     let f = frame(&px);
     let mut t: Tracker<60> = Tracker::new(Config::default(), 1).unwrap();
     t.init(&f, BOX).unwrap();
-    let Tracker { config: cfg, scratch, target, .. } = &mut t;
+    let Tracker { track: Track { config: cfg, target, .. }, scratch } = &mut t;
     let models = &target.as_ref().unwrap().models;
     let shift = crate::config::ShiftSearch { step: 0.05, rounds: 4, similarity: 3.0, template: 0.0 };
     let on = Ellipse { cx: 60.0, cy: 45.0, hx: 16.0, hy: 16.0 };
@@ -116,7 +116,7 @@ fn the_template_term_places_a_box_that_colour_cannot() {
     let cfg = Config { edges: None, ..Config::default() };
     let mut t: Tracker<60> = Tracker::new(cfg, 1).unwrap();
     t.init(&f, BOX).unwrap();
-    let Tracker { config: cfg, scratch, target, .. } = &mut t;
+    let Tracker { track: Track { config: cfg, target, .. }, scratch } = &mut t;
     let models = &target.as_ref().unwrap().models;
     let on = Ellipse { cx: 60.0, cy: 45.0, hx: 16.0, hy: 16.0 };
     let off = Ellipse { cx: 64.0, cy: 42.0, ..on };
@@ -405,7 +405,7 @@ fn redetection_finds_the_target_where_its_colours_stand_out() {
             }
         }
     }
-    let target = t.target.as_ref().unwrap();
+    let target = t.track.target.as_ref().unwrap();
     let spots = redetect(&mut t.scratch.fgmap, &frame(&moved), &target.models, target.half_axes);
     let (x, y) = spots[0].expect("a spot");
     // The target's centre is now (100, 71), 4 px from the frame's bottom.
