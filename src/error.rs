@@ -140,6 +140,16 @@ pub enum Error {
         /// The size of the frame given.
         got: (usize, usize),
     },
+    /// [`crate::Group::add`] on a group that holds as many targets as it can.
+    GroupFull {
+        /// How many targets the group holds.
+        capacity: usize,
+    },
+    /// No target of the group has this identity (never given, or removed).
+    UnknownTarget {
+        /// The identity asked for ([`crate::TargetId`]'s number).
+        id: u16,
+    },
 }
 
 impl From<FrameError> for Error {
@@ -224,6 +234,8 @@ impl fmt::Display for Error {
                 "frame is {}x{} but the tracker was initialised on {}x{}",
                 got.0, got.1, expected.0, expected.1
             ),
+            Error::GroupFull { capacity } => write!(f, "the group already holds {capacity} targets, its capacity"),
+            Error::UnknownTarget { id } => write!(f, "the group has no target {id}"),
         }
     }
 }

@@ -56,6 +56,18 @@ impl BoundingBox {
         if union > 0.0 { crate::scalar::clamp(inter / union, 0.0, 1.0) } else { 0.0 }
     }
 
+    /// The share of this box's area that `other` covers, in `[0, 1]` (0 for
+    /// an empty box).
+    pub fn covered_by(&self, other: &BoundingBox) -> Real {
+        let ix = (self.x + self.width).min(other.x + other.width) - self.x.max(other.x);
+        let iy = (self.y + self.height).min(other.y + other.height) - self.y.max(other.y);
+        let area = self.area();
+        if !(ix > 0.0 && iy > 0.0 && area > 0.0) {
+            return 0.0;
+        }
+        crate::scalar::clamp(ix * iy / area, 0.0, 1.0)
+    }
+
     /// Checks that the box is usable as a target in a `width × height` frame:
     /// finite, non-empty, no larger than the frame, and overlapping it.
     /// A box that only partly overlaps the frame is accepted as it is (its

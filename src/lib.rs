@@ -37,6 +37,8 @@
 //! - [`Histogram`], [`Model`]: integer kernel-weighted histograms and the
 //!   target model with its Bhattacharyya coefficient.
 //! - [`Tracker`]: the filter and its life cycle, configured by [`Config`].
+//! - [`Group`]: several targets at once, each with its identity, sharing
+//!   one working memory and kept apart.
 //! - [`MeanShift`]: the single-hypothesis baselines (mean shift, Kalman mean
 //!   shift) on the same frames, histograms and estimates.
 //!
@@ -75,6 +77,7 @@ pub mod follower;
 pub mod foreground;
 pub mod frame;
 pub mod geometry;
+pub mod group;
 pub mod histogram;
 pub mod likelihood;
 pub mod meanshift;
@@ -99,6 +102,7 @@ pub use filter::{Dynamics, Particle, Resampling};
 pub use foreground::BackgroundWeight;
 pub use frame::{Frame, Plane};
 pub use geometry::{BoundingBox, Ellipse};
+pub use group::{Added, Group, TargetId, Tracked};
 pub use histogram::{Histogram, Model, SUPPORT_WORDS, Similarity};
 pub use likelihood::{Combination, Likelihood, Shape, Sigma};
 pub use meanshift::{MeanShift, MeanShiftConfig, Prediction};

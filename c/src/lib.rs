@@ -239,6 +239,9 @@ fn code_of(e: &Error) -> i32 {
         Error::Region(_) => PFTRACK_ERR_BOX,
         Error::NotInitialised => PFTRACK_ERR_NOT_INITIALISED,
         Error::FrameSizeChanged { .. } => PFTRACK_ERR_FRAME_SIZE_CHANGED,
+        // A group's errors: this API wraps one tracker, whose calls never
+        // return them. Were one to arrive, it is a misuse of the call.
+        Error::GroupFull { .. } | Error::UnknownTarget { .. } => PFTRACK_ERR_CONFIG,
     }
 }
 

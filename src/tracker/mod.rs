@@ -27,6 +27,7 @@ use cues::Cues;
 pub use prior::ScalePrior;
 use rand_core::{Rng, SeedableRng};
 use rand_xoshiro::Xoshiro128PlusPlus;
+pub(crate) use scratch::Scratch;
 use scratch::*;
 use search::*;
 
@@ -193,6 +194,24 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
 }
 
 impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
+    /// The state.
+    pub(crate) fn state(&self) -> TrackState {
+        self.state
+    }
+
+    /// The frame size the target was learnt on, once it has been.
+    pub(crate) fn frame_size(&self) -> Option<(usize, usize)> {
+        self.target.as_ref().map(|t| t.frame)
+    }
+
+    /// The region the target holds while it is tracked: the last
+    /// estimate's centre and size. A target lost or searching holds none.
+    pub(crate) fn held(&self) -> Option<Ellipse> {
+        let t = self.target.as_ref().filter(|_| self.state == TrackState::Tracking)?;
+        let ((cx, cy), (hx, hy)) = (t.centre, t.half_axes);
+        Some(Ellipse { cx, cy, hx, hy })
+    }
+
     /// A target's state, before any box: validates `config` against the
     /// capacities.
     pub(crate) fn new(config: Config, rng: R) -> Result<Self, Error> {

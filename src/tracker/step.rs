@@ -22,7 +22,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     /// The frame must have the size the tracker was initialised with; any
     /// pixel format may be used.
     pub fn step(&mut self, frame: &Frame<'_>) -> Result<Estimate, Error> {
-        self.track.step_inner(&mut self.scratch, frame, None, &[])
+        self.track.step_inner(&mut self.scratch, frame, None, (None, &[]))
     }
 
     /// [`Tracker::step`] with an external size measurement for this frame
@@ -31,7 +31,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     /// the tracker is left as it was.
     pub fn step_with_prior(&mut self, frame: &Frame<'_>, prior: ScalePrior) -> Result<Estimate, Error> {
         prior.validate()?;
-        self.track.step_inner(&mut self.scratch, frame, Some(prior), &[])
+        self.track.step_inner(&mut self.scratch, frame, Some(prior), (None, &[]))
     }
 }
 
@@ -44,7 +44,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         scratch: &mut Scratch<K, E>,
         frame: &Frame<'_>,
         prior: Option<ScalePrior>,
-        held: &[Ellipse],
+        held: (Option<Ellipse>, &[Ellipse]),
     ) -> Result<Estimate, Error> {
         let target = self.target.as_ref().ok_or(Error::NotInitialised)?;
         let size = (frame.width(), frame.height());
@@ -131,7 +131,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         &mut self,
         scratch: &mut Scratch<K, E>,
         frame: &Frame<'_>,
-        _held: &[Ellipse],
+        held: (Option<Ellipse>, &[Ellipse]),
     ) -> Observed {
         let size = (frame.width(), frame.height());
         let table = if T > 0 { self.config.table } else { None };
@@ -183,6 +183,11 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         {
             for (w, &g) in weights.iter_mut().zip(scores.iter()) {
                 *w = (1.0 - b.weight) * *w + b.weight * (g as Real / out.g_best as Real);
+            }
+        }
+        if let (own, others @ [_, ..]) = held {
+            for (w, p) in weights.iter_mut().zip(particles.iter()) {
+                *w *= crate::group::apart(&p.ellipse(), own.as_ref(), others);
             }
         }
         out

@@ -1,0 +1,161 @@
+use super::*;
+use crate::frame::PixelFormat;
+use crate::testing::noise_bytes;
+use crate::tracker::Tracker;
+
+const W: usize = 160;
+const H: usize = 96;
+
+/// A textured RGB888 scene with same-coloured striped squares of side `s`
+/// centred at `centres`, the first drawn last (in front).
+fn scene(centres: &[(f32, f32)], s: usize, t: usize) -> Vec<u8> {
+    let noise = noise_bytes(t as u32 + 1, W * H);
+    let mut px = vec![0u8; W * H * 3];
+    for (i, p) in px.chunks_exact_mut(3).enumerate() {
+        let (x, y) = (i % W, i / W);
+        let base = if (x / 8 + y / 8) % 2 == 0 { 70 } else { 110 };
+        let n = noise[i] % 9;
+        p.copy_from_slice(&[base + n, base + 20 + n, base + 10 + n]);
+    }
+    for &(cx, cy) in centres.iter().rev() {
+        let (x0, y0) = ((cx - s as f32 / 2.0) as isize, (cy - s as f32 / 2.0) as isize);
+        for y in y0..y0 + s as isize {
+            for x in x0..x0 + s as isize {
+                if (0..W as isize).contains(&x) && (0..H as isize).contains(&y) {
+                    let stripe = ((y - y0) / 4) % 2 == 1;
+                    let c = if stripe { [235, 200, 40] } else { [215, 45, 35] };
+                    px[(y as usize * W + x as usize) * 3..][..3].copy_from_slice(&c);
+                }
+            }
+        }
+    }
+    px
+}
+
+fn frame(px: &[u8]) -> Frame<'_> {
+    Frame::packed(px, W, H, PixelFormat::Rgb888).unwrap()
+}
+
+fn square(c: (f32, f32), s: usize) -> BoundingBox {
+    BoundingBox::new(c.0 - s as f32 / 2.0, c.1 - s as f32 / 2.0, s as f32, s as f32)
+}
+
+#[test]
+fn apart_keeps_the_uncovered_share() {
+    // Reason: hand computation. A 10x10 box at (0, 0) beside one at (5, 0)
+    // of the same size: half of it covered, so it keeps 1 - APART / 2; one
+    // inside a larger box is wholly covered; a distant one is untouched.
+    let e = Ellipse::from_box(&BoundingBox::new(0.0, 0.0, 10.0, 10.0));
+    let half = Ellipse::from_box(&BoundingBox::new(5.0, 0.0, 10.0, 10.0));
+    let over = Ellipse::from_box(&BoundingBox::new(-5.0, -5.0, 30.0, 30.0));
+    let far = Ellipse::from_box(&BoundingBox::new(50.0, 50.0, 10.0, 10.0));
+    assert!((apart(&e, None, &[half]) - (1.0 - APART / 2.0)).abs() < 1e-6);
+    assert_eq!(apart(&e, None, &[far, over]), 1.0 - APART);
+    assert_eq!(apart(&e, None, &[]), 1.0);
+}
+
+#[test]
+fn a_group_of_one_is_a_tracker_with_the_same_seed() {
+    // Reason: cross-check of two paths. With no other target there is
+    // nothing to keep apart from, and target 0 draws from the group's seed,
+    // so the group repeats the lone tracker's computation bit for bit.
+    let path = |t: usize| (30.0 + 2.5 * t as f32, 48.0 + 6.0 * (t as f32 * 0.3).sin());
+    let first = scene(&[path(0)], 16, 0);
+    for seed in [1, 7] {
+        let mut lone: Tracker<60> = Tracker::new(Config::default(), seed).unwrap();
+        let mut group: Group<2, 60> = Group::new(Config::default(), seed).unwrap();
+        lone.init(&frame(&first), square(path(0), 16)).unwrap();
+        let id = group.add(&frame(&first), square(path(0), 16)).unwrap().id;
+        for t in 1..30 {
+            let px = scene(&[path(t)], 16, t);
+            let a = lone.step(&frame(&px)).unwrap();
+            let b = group.step(&frame(&px)).unwrap();
+            assert_eq!(b.len(), 1);
+            assert_eq!(b[0].id, id);
+            assert_eq!(format!("{a:?}"), format!("{:?}", b[0].estimate), "seed {seed}, frame {t}");
+        }
+    }
+}
+
+#[test]
+fn bad_calls_are_errors_and_leave_the_group_as_it_was() {
+    // Reason: the contract. A full group, an unknown or removed identity
+    // and a frame of another size are typed errors; identities are not
+    // reused after a removal.
+    let px = scene(&[(40.0, 40.0), (110.0, 50.0)], 16, 0);
+    let f = frame(&px);
+    let mut g: Group<2, 30> = Group::new(Config::default(), 1).unwrap();
+    let a = g.add(&f, square((40.0, 40.0), 16)).unwrap();
+    assert_eq!(a.overlap, None);
+    let b = g.add(&f, square((110.0, 50.0), 16)).unwrap();
+    assert_ne!(a.id, b.id);
+    assert_eq!(g.add(&f, square((80.0, 30.0), 16)).err(), Some(Error::GroupFull { capacity: 2 }));
+    assert_eq!(g.len(), 2);
+    g.remove(a.id).unwrap();
+    assert_eq!(g.remove(a.id), Err(Error::UnknownTarget { id: a.id.0 }));
+    assert_eq!(g.state(a.id), Err(Error::UnknownTarget { id: a.id.0 }));
+    assert_eq!(g.reinit(a.id, &f, square((40.0, 40.0), 16)).err(), Some(Error::UnknownTarget { id: a.id.0 }));
+    // A box half over target b: accepted, with their overlap (8x16 of two
+    // 16x16 boxes: IoU 128 / 384).
+    let c = g.add(&f, square((118.0, 50.0), 16)).unwrap();
+    assert!(c.id != a.id && c.id != b.id);
+    let (with, iou) = c.overlap.unwrap();
+    assert_eq!(with, b.id);
+    assert!((iou - 1.0 / 3.0).abs() < 1e-3, "{iou}");
+    let small = vec![0u8; 32 * 24 * 3];
+    let other = Frame::packed(&small, 32, 24, PixelFormat::Rgb888).unwrap();
+    assert_eq!(g.step(&other).err(), Some(Error::FrameSizeChanged { expected: (W, H), got: (32, 24) }));
+    assert_eq!(g.ids().collect::<Vec<_>>(), [c.id, b.id]);
+    g.remove(c.id).unwrap();
+    assert!(matches!(g.add(&other, BoundingBox::new(0.0, 0.0, 8.0, 8.0)), Err(Error::FrameSizeChanged { .. })));
+    assert_eq!(g.ids().collect::<Vec<_>>(), [b.id]);
+}
+
+/// The crossing scene: two same-coloured squares on one line, at
+/// different speeds, the faster in front; they overlap around frame 25 and
+/// are 68 px apart at frame 40.
+fn crossing(t: usize) -> [(f32, f32); 2] {
+    let t = t as f32;
+    [(24.0 + 2.5 * t, 48.0), (136.0 - 2.0 * t, 48.0)]
+}
+
+/// Frames (of the last ten) in which a target's estimate is nearer the
+/// other's truth than its own, with `apart` as the group's discount.
+fn swaps(seed: u64) -> usize {
+    swaps_with(seed, Config::default())
+}
+
+fn swaps_with(seed: u64, cfg: Config) -> usize {
+    let first = scene(&crossing(0), 16, 0);
+    let mut g: Group<2, 60> = Group::new(cfg, seed).unwrap();
+    let [a, b] = crossing(0);
+    let ids = [g.add(&frame(&first), square(a, 16)).unwrap().id, g.add(&frame(&first), square(b, 16)).unwrap().id];
+    let mut swapped = 0;
+    for t in 1..=40 {
+        let truth = crossing(t);
+        let px = scene(&truth, 16, t);
+        let out = g.step(&frame(&px)).unwrap();
+        if t <= 30 {
+            continue;
+        }
+        for (i, id) in ids.iter().enumerate() {
+            let est = out.iter().find(|o| o.id == *id).unwrap().estimate.bbox().centre();
+            let d = |p: (f32, f32)| (est.0 - p.0).abs() + (est.1 - p.1).abs();
+            if d(truth[1 - i]) < d(truth[i]) {
+                swapped += 1;
+            }
+        }
+    }
+    swapped
+}
+
+#[test]
+fn two_same_coloured_targets_cross_without_swapping() {
+    // Reason: generated scene with exact truth. After the crossing each
+    // target's estimate must be nearer its own square than the other's,
+    // for every one of 16 seeds. (Two lone trackers, or a group that does
+    // not keep its targets apart, fail on 9 of the 16: both settle on one
+    // square, or they swap.)
+    let bad: Vec<_> = (1..=16).map(|s| (s, swaps(s))).filter(|&(_, n)| n > 0).collect();
+    assert!(bad.is_empty(), "seeds with a swap or a merge (seed, frames): {bad:?}");
+}
