@@ -97,6 +97,58 @@ impl Canvas {
     }
 }
 
+/// The colours targets are drawn in, by identity (repeating).
+const TARGET_COLOURS: [[u8; 3]; 6] =
+    [[255, 255, 255], [255, 220, 0], [0, 230, 255], [255, 80, 200], [120, 255, 80], [255, 140, 40]];
+
+/// A 3x5 pixel font for the digits 0-9, a row of three bits each, top first.
+const DIGITS: [[u8; 5]; 10] = [
+    [7, 5, 5, 5, 7],
+    [2, 6, 2, 2, 7],
+    [7, 1, 7, 4, 7],
+    [7, 1, 7, 1, 7],
+    [5, 5, 7, 1, 1],
+    [7, 4, 7, 1, 7],
+    [7, 4, 7, 5, 7],
+    [7, 1, 1, 1, 1],
+    [7, 5, 7, 5, 7],
+    [7, 5, 7, 1, 7],
+];
+
+impl Canvas {
+    /// Writes the number `n` in 3x5 digits, each pixel doubled, with its top
+    /// left at `(x, y)`.
+    pub fn number(&mut self, x: i64, y: i64, n: u32, c: [u8; 3]) {
+        for (k, ch) in n.to_string().bytes().enumerate() {
+            let rows = DIGITS[(ch - b'0') as usize];
+            for (dy, bits) in rows.iter().enumerate() {
+                for dx in 0..3 {
+                    if bits >> (2 - dx) & 1 == 1 {
+                        let (px, py) = (x + 8 * k as i64 + 2 * dx as i64, y + 2 * dy as i64);
+                        for (ox, oy) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+                            self.put(px + ox, py + oy, c);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Draws several targets' estimates: each in its identity's colour, with
+/// its identity written above its box; a target not tracked is drawn dimmed.
+pub fn annotate_targets(canvas: &mut Canvas, targets: &[(u16, Estimate)]) {
+    for (id, e) in targets {
+        let mut c = TARGET_COLOURS[*id as usize % TARGET_COLOURS.len()];
+        if e.state != TrackState::Tracking {
+            c = c.map(|v| v / 3);
+        }
+        canvas.ellipse(&e.ellipse, c);
+        let b = e.bbox();
+        canvas.number(b.x.round() as i64, b.y.round() as i64 - 12, *id as u32, c);
+    }
+}
+
 /// Draws one frame's overlay.
 pub fn annotate(canvas: &mut Canvas, est: Option<&Estimate>, truth: Option<&BoundingBox>, particles: &[(f32, f32)]) {
     for &(x, y) in particles {
@@ -152,11 +204,22 @@ impl GifFrames {
         truth: Option<&BoundingBox>,
         particles: &[(f32, f32)],
     ) {
+        self.push_drawn(i, (width, height, rgb), |c| annotate(c, est, truth, particles));
+    }
+
+    /// Adds frame `i` (from 0), `rgb` its pixels, with what `draw` draws on
+    /// it, if it is one to keep.
+    pub fn push_drawn(
+        &mut self,
+        i: usize,
+        (width, height, rgb): (usize, usize, Vec<u8>),
+        draw: impl FnOnce(&mut Canvas),
+    ) {
         if !self.wants(i) {
             return;
         }
         let mut c = Canvas::new(width, height, rgb);
-        annotate(&mut c, est, truth, particles);
+        draw(&mut c);
         self.canvases.push(c.scaled(self.scale));
         if self.canvases.len() > Self::MAX {
             let mut n = 0;

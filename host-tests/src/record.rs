@@ -19,40 +19,61 @@ pub struct Record {
     pub confidence: f32,
     /// The estimated box (for frame 1, the box given).
     pub bbox: BoundingBox,
+    /// The target's identity when several are tracked.
+    pub target: Option<u16>,
 }
 
 impl Record {
     /// Frame 1: the tracker initialised on `bbox`.
     pub fn initial(bbox: BoundingBox) -> Self {
-        Record { frame: 1, state: TrackState::Tracking, event: Some(Event::Initialised), confidence: 1.0, bbox }
+        Record {
+            frame: 1,
+            state: TrackState::Tracking,
+            event: Some(Event::Initialised),
+            confidence: 1.0,
+            bbox,
+            target: None,
+        }
     }
 
     /// Frame `frame`'s estimate.
     pub fn of(frame: usize, e: &Estimate) -> Self {
-        Record { frame, state: e.state, event: e.event, confidence: e.confidence, bbox: e.bbox() }
+        Record { frame, state: e.state, event: e.event, confidence: e.confidence, bbox: e.bbox(), target: None }
+    }
+
+    /// The record of target `id` of several.
+    pub fn of_target(self, id: u16) -> Self {
+        Record { target: Some(id), ..self }
     }
 
     /// The JSON line, without its newline: `{"frame":1,"state":"tracking",
-    /// "event":"initialised","confidence":1.0,"box":[x,y,w,h]}`. Numbers are
-    /// written exactly (the shortest decimal that reads back as the same
-    /// `f32`).
+    /// "event":"initialised","confidence":1.0,"box":[x,y,w,h]}`, with
+    /// `"target":ID` after the frame when several targets are tracked.
+    /// Numbers are written exactly (the shortest decimal that reads back as
+    /// the same `f32`).
     pub fn json(&self) -> String {
         let event = self.event.map_or_else(|| "null".to_string(), |e| format!("\"{}\"", event_name(e)));
+        let target = self.target.map_or_else(String::new, |id| format!("\"target\":{id},"));
         let [confidence, x, y, w, h] = self.numbers();
         format!(
-            "{{\"frame\":{},\"state\":\"{}\",\"event\":{event},\"confidence\":{confidence},\"box\":[{x},{y},{w},{h}]}}",
+            "{{\"frame\":{},{target}\"state\":\"{}\",\"event\":{event},\"confidence\":{confidence},\"box\":[{x},{y},{w},{h}]}}",
             self.frame,
             state_name(self.state),
         )
     }
 
-    /// The CSV header that goes with [`Record::csv`].
+    /// The CSV header that goes with [`Record::csv`] for one target.
     pub const CSV_HEADER: &'static str = "frame,state,confidence,x,y,w,h";
 
-    /// The CSV row, without its newline.
+    /// The CSV header that goes with [`Record::csv`] for several targets.
+    pub const CSV_HEADER_TARGETS: &'static str = "frame,target,state,confidence,x,y,w,h";
+
+    /// The CSV row, without its newline (with the target's identity after
+    /// the frame when several are tracked).
     pub fn csv(&self) -> String {
         let [confidence, x, y, w, h] = self.numbers();
-        format!("{},{},{confidence},{x},{y},{w},{h}", self.frame, state_name(self.state))
+        let target = self.target.map_or_else(String::new, |id| format!("{id},"));
+        format!("{},{target}{},{confidence},{x},{y},{w},{h}", self.frame, state_name(self.state))
     }
 
     /// The confidence and the box as the records write them.
@@ -117,9 +138,14 @@ impl<W: Write> Y4mWriter<W> {
     /// bar as long as its confidence, coloured by state) and `particles`
     /// drawn on it if given.
     pub fn write(&mut self, frame: &Frame<'_>, est: Option<&Estimate>, particles: &[(f32, f32)]) -> Result<(), String> {
+        self.write_drawn(frame, |c| annotate(c, est, None, particles))
+    }
+
+    /// Writes `frame` with what `draw` draws on it.
+    pub fn write_drawn(&mut self, frame: &Frame<'_>, draw: impl FnOnce(&mut Canvas)) -> Result<(), String> {
         let (w, h) = self.size;
         let mut c = Canvas::new(w, h, crate::scene::to_rgb(frame));
-        annotate(&mut c, est, None, particles);
+        draw(&mut c);
         let yuv: Vec<[u8; 3]> = c.pixels().as_chunks::<3>().0.iter().map(|&p| rgb_to_yuv(p)).collect();
         let [y, u, v] = &mut self.planes;
         y.clear();
@@ -164,5 +190,9 @@ mod tests {
         assert!(r.json().contains(r#""state":"lost","event":null,"confidence":0.25"#), "{}", r.json());
         let r = Record { confidence: f32::NAN, ..r };
         assert!(r.json().contains(r#""confidence":null"#));
+        let r = Record { confidence: 0.5, ..r }.of_target(3);
+        assert!(r.json().starts_with(r#"{"frame":7,"target":3,"state":"lost""#), "{}", r.json());
+        assert_eq!(r.csv(), "7,3,lost,0.5,120.0,80.0,40.0,60.0");
+        assert_eq!(Record::CSV_HEADER_TARGETS.split(',').count(), r.csv().split(',').count());
     }
 }

@@ -38,6 +38,14 @@ pub const TABLE_CELLS: usize = 16384;
 /// The tracker type the harness uses.
 pub type HostTracker = Tracker<PARTICLES, 512, EDGE_CELLS, rand_xoshiro::Xoshiro128PlusPlus, TABLE_CELLS>;
 
+/// The group the host tools track several targets with: up to
+/// [`GROUP_TARGETS`] of them, each as [`HostTracker`] follows one.
+pub type HostGroup =
+    pftrack::Group<GROUP_TARGETS, PARTICLES, 512, EDGE_CELLS, rand_xoshiro::Xoshiro128PlusPlus, TABLE_CELLS>;
+
+/// The most targets `track run` follows at once.
+pub const GROUP_TARGETS: usize = 8;
+
 /// Which tracker runs.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum Method {

@@ -237,3 +237,38 @@ fn memory_does_not_grow_with_the_number_of_frames() {
     assert!(peaks[1] <= peaks[0] + 0.5, "track otb: peak {} MB for 44 frames, {} MB for 440", peaks[0], peaks[1]);
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[test]
+fn several_boxes_give_each_target_its_records_and_identity() {
+    // Reason: the distractor fixture's scene: the target moves right
+    // (centre (30 + 1.5 t, 40)) and a decoy of the same colours left
+    // (centre (100 - 1.5 t, 58)), passing behind it. Given both boxes, each
+    // frame has one record per target, in identity order, and each stays
+    // within 5 px of its own path (the generator's truth).
+    let f = fixture("distractor");
+    let (ok, out, err) = track(&["run", &f, "--box", &first_box("distractor"), "--box", "89,45,22,26"]);
+    assert!(ok, "{err}");
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(lines.len(), 2 * 44);
+    for (i, l) in lines.iter().enumerate() {
+        let (frame, target) = (i / 2, i % 2);
+        assert!(l.starts_with(&format!("{{\"frame\":{},\"target\":{target},", frame + 1)), "{l}");
+        let nums: Vec<f32> = l
+            .split("\"box\":[")
+            .nth(1)
+            .unwrap()
+            .trim_end_matches("]}")
+            .split(',')
+            .map(|v| v.parse().unwrap())
+            .collect();
+        let (cx, cy) = (nums[0] + nums[2] / 2.0, nums[1] + nums[3] / 2.0);
+        let t = frame as f32;
+        let (tx, ty) = if target == 0 { (30.0 + 1.5 * t, 40.0) } else { (100.0 - 1.5 * t, 58.0) };
+        assert!((cx - tx).abs() < 5.0 && (cy - ty).abs() < 5.0, "frame {} target {target}: {l}", frame + 1);
+    }
+    // Several boxes need the particle filter, and one truth scores one target.
+    let (ok, _, err) = track(&["run", &f, "--box", "1,1,5,5", "--box", "9,9,5,5", "--tracker", "meanshift"]);
+    assert!(!ok && err.contains("particle filter"), "{err}");
+    let (ok, _, err) = track(&["run", &f, "--box", "1,1,5,5", "--box", "9,9,5,5", "--truth", &f]);
+    assert!(!ok && err.contains("one target"), "{err}");
+}

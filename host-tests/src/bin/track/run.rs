@@ -3,7 +3,8 @@
 use crate::shared::{create, peak_memory};
 use host_tests::metrics::{has_target, score};
 use host_tests::otb;
-use host_tests::runner::{AnyTracker, Method};
+use host_tests::picture::annotate_targets;
+use host_tests::runner::{AnyTracker, HostGroup, Method};
 use host_tests::source::{RawSpec, fixture_truth};
 use indicatif::{ProgressBar, ProgressStyle};
 use pftrack::{BoundingBox, Config, Estimate, Event, Frame, TrackState};
@@ -17,8 +18,11 @@ pub(crate) struct RunArgs {
     /// or with --raw a raw camera dump (a file or `-`).
     input: String,
     /// The target in the first frame: left, top, width, height in pixels.
-    #[arg(long = "box", value_name = "X,Y,W,H", allow_hyphen_values = true)]
-    bbox: String,
+    /// Repeat it to track several targets at once (the particle filter
+    /// only): each record then carries the target's identity, 0 for the
+    /// first box, 1 for the second and so on.
+    #[arg(long = "box", value_name = "X,Y,W,H", allow_hyphen_values = true, required = true)]
+    bbox: Vec<String>,
     /// Read INPUT as raw frames back to back: rgb565, rgb888, yuyv, gray8,
     /// i420 or nv12, rows packed, e.g. `--raw rgb565:320x240`.
     #[arg(long, value_name = "FORMAT:WxH")]
@@ -58,6 +62,17 @@ pub(crate) struct RunArgs {
     set: Vec<String>,
 }
 
+/// A `--box` value: `X,Y,W,H`.
+fn parse_box(text: &str) -> Result<BoundingBox, String> {
+    let v: Vec<f32> = text
+        .split(',')
+        .map(|t| t.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("--box `{text}` is not four numbers X,Y,W,H"))?;
+    let [x, y, w, h] = v[..] else { return Err(format!("--box `{text}` is not four numbers X,Y,W,H")) };
+    Ok(BoundingBox::new(x, y, w, h))
+}
+
 /// Where `track run` writes the records.
 enum Sink {
     Json(Box<dyn std::io::Write>),
@@ -76,14 +91,18 @@ pub(crate) fn command(a: &RunArgs) -> Result<(), String> {
         host_tests::settings::apply(&mut config, s).map_err(|e| format!("--set {e}"))?;
     }
     config.validate().map_err(|e| e.to_string())?;
-    let v: Vec<f32> = a
-        .bbox
-        .split(',')
-        .map(|t| t.trim().parse::<f32>())
-        .collect::<Result<_, _>>()
-        .map_err(|_| format!("--box `{}` is not four numbers X,Y,W,H", a.bbox))?;
-    let [x, y, w, h] = v[..] else { return Err(format!("--box `{}` is not four numbers X,Y,W,H", a.bbox)) };
-    let init = BoundingBox::new(x, y, w, h);
+    let boxes = a.bbox.iter().map(|b| parse_box(b)).collect::<Result<Vec<_>, _>>()?;
+    let several = boxes.len() > 1;
+    if several && a.tracker != Method::Pf {
+        return Err("several --box need the particle filter (--tracker pf)".into());
+    }
+    if several && a.truth.is_some() {
+        return Err("--truth scores one target: give one --box".into());
+    }
+    if boxes.len() > host_tests::runner::GROUP_TARGETS {
+        return Err(format!("at most {} --box at once", host_tests::runner::GROUP_TARGETS));
+    }
+    let init = boxes[0];
     let stdout_video = a.annotate.as_deref() == Some("-");
     if stdout_video && a.json.is_none() && a.csv.is_none() {
         return Err("--annotate - writes video to standard output: give --json FILE or --csv FILE for the track".into());
@@ -94,7 +113,8 @@ pub(crate) fn command(a: &RunArgs) -> Result<(), String> {
     }
     if let Some(p) = &a.csv {
         let mut out = create(p)?;
-        writeln!(out, "{}", Record::CSV_HEADER).map_err(|e| format!("{}: {e}", p.display()))?;
+        let header = if several { Record::CSV_HEADER_TARGETS } else { Record::CSV_HEADER };
+        writeln!(out, "{header}").map_err(|e| format!("{}: {e}", p.display()))?;
         sinks.push(Sink::Csv(out));
     }
     if sinks.is_empty() {
@@ -146,6 +166,61 @@ pub(crate) fn command(a: &RunArgs) -> Result<(), String> {
                 .map_err(|e| format!("{}: {e}", p.display()))?,
         ),
     };
+    if several {
+        let t0 = std::time::Instant::now();
+        let first = src.next_frame()?.ok_or_else(|| format!("{}: no frames", a.input))?;
+        let mut group = Box::new(HostGroup::new(config, a.seed).map_err(|e| e.to_string())?);
+        let mut targets = Vec::new();
+        for b in &boxes {
+            let added = group.add(&first, *b).map_err(|e| format!("frame 1, --box {b:?}: {e}"))?;
+            if let Some((with, iou)) = added.overlap {
+                eprintln!("target {} overlaps target {} (IoU {iou:.2})", added.id.0, with.0);
+            }
+            write(&Record::initial(*b).of_target(added.id.0))?;
+            targets.push((added.id.0, added.estimate));
+        }
+        let mut draw = |i: usize, f: &Frame<'_>, targets: &[(u16, Estimate)]| -> Result<(), String> {
+            let kept = gif.as_ref().is_some_and(|g| g.wants(i));
+            if let Some(v) = &mut video {
+                v.write_drawn(f, |c| annotate_targets(c, targets))?;
+            }
+            if let Some(g) = gif.as_mut().filter(|_| kept) {
+                let rgb = (f.width(), f.height(), host_tests::scene::to_rgb(f));
+                g.push_drawn(i, rgb, |c| annotate_targets(c, targets));
+            }
+            Ok(())
+        };
+        draw(0, &first, &targets)?;
+        let mut frames = 1usize;
+        while !closed.get()
+            && let Some(f) = src.next_frame()?
+        {
+            frames += 1;
+            let out = group.step(&f).map_err(|e| format!("frame {frames}: {e}"))?;
+            targets.clear();
+            for t in &out {
+                write(&Record::of(frames, &t.estimate).of_target(t.id.0))?;
+                targets.push((t.id.0, t.estimate));
+            }
+            draw(frames - 1, &f, &targets)?;
+            pb.set_position(frames as u64);
+        }
+        pb.finish_and_clear();
+        drop(video);
+        if let (Some(path), Some(g)) = (&a.gif, &gif) {
+            g.write(path, None, (66 * g.every() as u32).min(1000))?;
+        }
+        if a.summary {
+            let secs = t0.elapsed().as_secs_f64();
+            eprintln!(
+                "{frames} frames of {} targets in {secs:.2} s ({:.0} fps), peak memory {}",
+                boxes.len(),
+                frames as f64 / secs.max(1e-9),
+                peak_memory()
+            );
+        }
+        return Ok(());
+    }
     let mut boxes = Vec::new();
     let t0 = std::time::Instant::now();
     let first = src.next_frame()?.ok_or_else(|| format!("{}: no frames", a.input))?;
