@@ -9,22 +9,25 @@
 //! ```text
 //! header, 32 bytes
 //!   0   [u8; 8]  magic "PFTRKFX1"
-//!   8   u16      version = 1
+//!   8   u16      version: 1 for one target, 2 for several
 //!   10  u16      pixel format: 1 RGB565 (LE), 2 RGB888, 3 YUV422 (YUYV), 4 GRAY8,
 //!                5 I420 (planar YUV 4:2:0), 6 NV12 (Y plane, interleaved UV)
 //!   12  u16      width, pixels
 //!   14  u16      height, pixels
 //!   16  u32      stride, bytes per row (>= width * bytes per pixel)
 //!   20  u32      frame count
-//!   24  u32      reserved, 0
+//!   24  u16      version 2: the number of targets T (2 to 16); version 1: 0
+//!   26  u16      reserved, 0
 //!   28  u32      reserved, 0
-//! frame record, 20 + frame bytes, repeated `frame count` times; frame
-//! bytes are stride * height, and for I420 plus 2 * (stride / 2) * (height / 2)
-//! (the U, then the V plane), for NV12 plus stride * (height / 2) (the UV plane)
-//!   0   f32 x4   ground-truth box x, y, w, h (top-left origin, pixels)
-//!   16  u16      visible fraction of the target, per mille (0 = absent or fully hidden)
-//!   18  u16      reserved, 0
-//!   20  [u8]     the frame bytes
+//! frame record, 20 * T + frame bytes, repeated `frame count` times (T is 1
+//! in version 1); frame bytes are stride * height, and for I420 plus
+//! 2 * (stride / 2) * (height / 2) (the U, then the V plane), for NV12 plus
+//! stride * (height / 2) (the UV plane)
+//!   T times, one per target in the order they are to be added:
+//!     0   f32 x4   ground-truth box x, y, w, h (top-left origin, pixels)
+//!     16  u16      visible fraction of the target, per mille (0 = absent or fully hidden)
+//!     18  u16      reserved, 0
+//!   20 * T  [u8]   the frame bytes
 //! ```
 //!
 //! Everything is validated and reported as a [`FixtureError`]; nothing
@@ -36,8 +39,12 @@ use pftrack::{BoundingBox, Frame, FrameError, PixelFormat};
 
 /// The magic bytes at the start of every fixture.
 pub const MAGIC: &[u8; 8] = b"PFTRKFX1";
-/// The only version this code reads and writes.
+/// The version of a fixture with one target.
 pub const VERSION: u16 = 1;
+/// The version of a fixture with several targets.
+pub const VERSION_TARGETS: u16 = 2;
+/// The most targets a fixture holds.
+pub const MAX_TARGETS: u16 = 16;
 /// Size of the header in bytes.
 pub const HEADER_LEN: usize = 32;
 /// Size of a frame record's metadata, before its pixels.
@@ -57,6 +64,9 @@ pub enum FixtureError {
     UnsupportedVersion(u16),
     /// An unknown pixel format code.
     UnknownFormat(u16),
+    /// A fixture of several targets (version 2) whose target count is not
+    /// 2 to [`MAX_TARGETS`].
+    BadTargets(u16),
     /// The header's dimensions are inconsistent.
     BadDimensions(FrameError),
     /// The file ends inside frame `index`.
@@ -94,7 +104,12 @@ impl fmt::Display for FixtureError {
                 write!(f, "file is {len} bytes, shorter than the {HEADER_LEN}-byte fixture header")
             }
             FixtureError::BadMagic => write!(f, "not a pftrack fixture (bad magic bytes)"),
-            FixtureError::UnsupportedVersion(v) => write!(f, "fixture version {v} is not supported (want {VERSION})"),
+            FixtureError::UnsupportedVersion(v) => {
+                write!(f, "fixture version {v} is not supported (want {VERSION} or {VERSION_TARGETS})")
+            }
+            FixtureError::BadTargets(n) => {
+                write!(f, "a fixture of several targets says it has {n} (want 2 to {MAX_TARGETS})")
+            }
             FixtureError::UnknownFormat(c) => write!(f, "unknown pixel format code {c}"),
             FixtureError::BadDimensions(e) => write!(f, "inconsistent header dimensions: {e}"),
             FixtureError::TruncatedFrame { index, expected_len, actual_len } => {
@@ -136,6 +151,9 @@ pub struct Header {
     pub stride: usize,
     /// Number of frame records that follow.
     pub frames: u32,
+    /// Number of targets, each with its truth in every record (1 to
+    /// [`MAX_TARGETS`]).
+    pub targets: u16,
 }
 
 impl Header {
@@ -148,10 +166,14 @@ impl Header {
         if bytes.get(..8) != Some(MAGIC.as_slice()) {
             return Err(FixtureError::BadMagic);
         }
-        let version = u16_at(bytes, 8);
-        if version != VERSION {
-            return Err(FixtureError::UnsupportedVersion(version));
-        }
+        let targets = match u16_at(bytes, 8) {
+            VERSION => 1,
+            VERSION_TARGETS => match u16_at(bytes, 24) {
+                n @ 2..=MAX_TARGETS => n,
+                n => return Err(FixtureError::BadTargets(n)),
+            },
+            v => return Err(FixtureError::UnsupportedVersion(v)),
+        };
         let code = u16_at(bytes, 10);
         let format = PixelFormat::from_code(code).ok_or(FixtureError::UnknownFormat(code))?;
         let h = Header {
@@ -160,6 +182,7 @@ impl Header {
             height: u16_at(bytes, 14) as usize,
             stride: u32_at(bytes, 16) as usize,
             frames: u32_at(bytes, 20),
+            targets,
         };
         // With an empty buffer, consistent dimensions fail only on its length.
         match Frame::new(&[], h.width, h.height, h.stride, h.format) {
@@ -171,14 +194,16 @@ impl Header {
     /// The header's bytes.
     pub fn to_bytes(&self) -> [u8; HEADER_LEN] {
         let mut b = [0u8; HEADER_LEN];
-        let fields: [(usize, &[u8]); 7] = [
+        let (version, targets) = if self.targets > 1 { (VERSION_TARGETS, self.targets) } else { (VERSION, 0) };
+        let fields: [(usize, &[u8]); 8] = [
             (0, MAGIC),
-            (8, &VERSION.to_le_bytes()),
+            (8, &version.to_le_bytes()),
             (10, &self.format.code().to_le_bytes()),
             (12, &(self.width as u16).to_le_bytes()),
             (14, &(self.height as u16).to_le_bytes()),
             (16, &(self.stride as u32).to_le_bytes()),
             (20, &self.frames.to_le_bytes()),
+            (24, &targets.to_le_bytes()),
         ];
         for (at, v) in fields {
             if let Some(dst) = b.get_mut(at..at + v.len()) {
@@ -195,9 +220,15 @@ impl Header {
         self.format.frame_bytes(self.stride, self.height).unwrap_or(usize::MAX)
     }
 
+    /// Bytes of one frame record's metadata: one [`RECORD_META_LEN`] per
+    /// target.
+    pub fn meta_len(&self) -> usize {
+        RECORD_META_LEN * self.targets.max(1) as usize
+    }
+
     /// Bytes of one frame record, metadata included.
     pub fn record_len(&self) -> usize {
-        RECORD_META_LEN.saturating_add(self.frame_len())
+        self.meta_len().saturating_add(self.frame_len())
     }
 }
 
@@ -249,7 +280,7 @@ mod tests {
 
     #[test]
     fn header_round_trip_and_errors() {
-        let h = Header { format: PixelFormat::Rgb565, width: 3, height: 2, stride: 8, frames: 5 };
+        let h = Header { format: PixelFormat::Rgb565, width: 3, height: 2, stride: 8, frames: 5, targets: 1 };
         let b = h.to_bytes();
         assert_eq!(Header::parse(&b), Ok(h));
         // Reason: 20 bytes of metadata + 8 * 2 bytes of pixels.
@@ -267,6 +298,25 @@ mod tests {
         let mut bad = b;
         bad[16] = 2; // stride 2 < 3 px * 2 bytes
         assert!(matches!(Header::parse(&bad), Err(FixtureError::BadDimensions(FrameError::StrideTooSmall { .. }))));
+    }
+
+    #[test]
+    fn several_targets_are_version_2_with_a_truth_each() {
+        // Reason: the layout above. Three targets: version 2, the count at
+        // byte 24, and records of 3 * 20 bytes of metadata before the
+        // 8 * 2 bytes of pixels. One target writes version 1, as ever.
+        let h = Header { format: PixelFormat::Rgb565, width: 3, height: 2, stride: 8, frames: 5, targets: 3 };
+        let b = h.to_bytes();
+        assert_eq!((b[8], b[24]), (2, 3));
+        assert_eq!(Header::parse(&b), Ok(h));
+        assert_eq!((h.meta_len(), h.record_len()), (60, 76));
+        let one = Header { targets: 1, ..h }.to_bytes();
+        assert_eq!((one[8], one[24]), (1, 0));
+        for n in [0u16, 1, 17] {
+            let mut bad = b;
+            bad[24..26].copy_from_slice(&n.to_le_bytes());
+            assert_eq!(Header::parse(&bad), Err(FixtureError::BadTargets(n)));
+        }
     }
 
     #[test]

@@ -11,11 +11,13 @@ fuzz_target!(|data: &[u8]| {
     let mut at = HEADER_LEN;
     for i in 0..h.frames {
         let Some(rec) = data.get(at..at.saturating_add(h.record_len())) else { break };
-        if let Ok(m) = RecordMeta::parse(rec, i) {
-            assert!(m.truth.x.is_finite() && m.visible_permille <= 1000);
-            assert_eq!(RecordMeta::parse(&m.to_bytes(), i), Ok(m), "record round trip");
+        for meta in rec.get(..h.meta_len()).unwrap_or_default().chunks(RECORD_META_LEN) {
+            if let Ok(m) = RecordMeta::parse(meta, i) {
+                assert!(m.truth.x.is_finite() && m.visible_permille <= 1000);
+                assert_eq!(RecordMeta::parse(&m.to_bytes(), i), Ok(m), "record round trip");
+            }
         }
-        let _ = rec.get(RECORD_META_LEN..);
+        let _ = rec.get(h.meta_len()..);
         at += h.record_len();
     }
 });

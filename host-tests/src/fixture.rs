@@ -14,8 +14,19 @@ pub struct FixtureFrame {
     pub truth: BoundingBox,
     /// Fraction of the target visible, per mille.
     pub visible_permille: u16,
+    /// The truths of the other targets of a fixture with several, in the
+    /// order they are added (empty for one target).
+    pub others: Vec<RecordMeta>,
     /// `stride * height` bytes of pixels.
     pub pixels: Vec<u8>,
+}
+
+impl FixtureFrame {
+    /// Every target's truth and visibility, the first target's first.
+    pub fn targets(&self) -> impl Iterator<Item = RecordMeta> + '_ {
+        let first = RecordMeta { truth: self.truth, visible_permille: self.visible_permille };
+        std::iter::once(first).chain(self.others.iter().copied())
+    }
 }
 
 /// A whole fixture in memory.
@@ -46,8 +57,11 @@ impl Fixture {
                 return Err(FixtureError::TruncatedFrame { index, expected_len: record_len, actual_len: rest });
             }
             let meta = RecordMeta::parse(&bytes[at..at + RECORD_META_LEN], index)?;
-            let pixels = bytes[at + RECORD_META_LEN..at + record_len].to_vec();
-            frames.push(FixtureFrame { truth: meta.truth, visible_permille: meta.visible_permille, pixels });
+            let others = (1..h.targets as usize)
+                .map(|k| RecordMeta::parse(&bytes[at + k * RECORD_META_LEN..], index))
+                .collect::<Result<_, _>>()?;
+            let pixels = bytes[at + h.meta_len()..at + record_len].to_vec();
+            frames.push(FixtureFrame { truth: meta.truth, visible_permille: meta.visible_permille, others, pixels });
             at += record_len;
         }
         if at != bytes.len() {
@@ -64,11 +78,14 @@ impl Fixture {
             height: self.height,
             stride: self.stride,
             frames: self.frames.len() as u32,
+            targets: self.frames.first().map_or(1, |f| 1 + f.others.len() as u16),
         };
         let mut out = Vec::with_capacity(HEADER_LEN + self.frames.len() * h.record_len());
         out.extend_from_slice(&h.to_bytes());
         for f in &self.frames {
-            out.extend_from_slice(&RecordMeta { truth: f.truth, visible_permille: f.visible_permille }.to_bytes());
+            for m in f.targets() {
+                out.extend_from_slice(&m.to_bytes());
+            }
             out.extend_from_slice(&f.pixels);
         }
         out
@@ -101,6 +118,7 @@ mod tests {
                 .map(|i| FixtureFrame {
                     truth: BoundingBox::new(i as f32, 0.5, 2.0, 1.0),
                     visible_permille: 1000 - i as u16,
+                    others: Vec::new(),
                     pixels: (0..16).map(|b| (b * 7 + i) as u8).collect(),
                 })
                 .collect(),

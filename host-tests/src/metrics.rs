@@ -200,6 +200,31 @@ impl Awareness {
     }
 }
 
+/// The IoU at which a box is on a target: the usual threshold of a
+/// correct detection.
+pub const ON_TARGET_IOU: f32 = 0.5;
+
+/// Identity swaps of several tracks against several truths, target `k`'s
+/// track against target `k`'s truth: the (frame, target) pairs where the
+/// track claims the target (`Some`: the tracker reports it tracked) on
+/// another target's truth (IoU at least [`ON_TARGET_IOU`]) and not on its
+/// own. A target reported lost claims nothing. Frames past the shortest
+/// list are not counted.
+pub fn identity_swaps(tracks: &[Vec<Option<BoundingBox>>], truths: &[Vec<BoundingBox>]) -> usize {
+    let frames = tracks.iter().map(Vec::len).chain(truths.iter().map(Vec::len)).min().unwrap_or(0);
+    let mut swaps = 0;
+    for f in 0..frames {
+        for (k, track) in tracks.iter().enumerate() {
+            let Some(b) = &track[f] else { continue };
+            let on = |t: &BoundingBox| has_target(t) && b.iou(t) >= ON_TARGET_IOU;
+            let own = truths.get(k).is_some_and(|t| on(&t[f]));
+            let other = truths.iter().enumerate().any(|(j, t)| j != k && on(&t[f]));
+            swaps += usize::from(other && !own);
+        }
+    }
+    swaps
+}
+
 /// The median of a list (0 for an empty one).
 pub fn median(values: &[f64]) -> f64 {
     if values.is_empty() {
@@ -320,5 +345,22 @@ mod tests {
         assert_eq!(median(&[3.0, 1.0, 2.0]), 2.0);
         assert_eq!(median(&[4.0, 1.0, 2.0, 3.0]), 2.5);
         assert_eq!(median(&[]), 0.0);
+    }
+
+    #[test]
+    fn identity_swaps_count_tracks_on_another_target_and_not_their_own() {
+        // Reason: hand-built tracks. Two targets 100 px apart for four
+        // frames; on frame 2 the tracks are exchanged (two swaps), on
+        // frame 3 both tracks sit on target B (one swap: A's track, which
+        // is on B's truth and not its own); on frame 4 A's track is on B
+        // but reported lost (no claim, no swap).
+        let (a, b) = (BoundingBox::new(0.0, 0.0, 10.0, 10.0), BoundingBox::new(100.0, 0.0, 10.0, 10.0));
+        let truths = vec![vec![a, a, a, a], vec![b, b, b, b]];
+        let tracks = vec![vec![Some(a), Some(b), Some(b), None], vec![Some(b), Some(a), Some(b), Some(b)]];
+        assert_eq!(identity_swaps(&tracks, &truths), 3);
+        // Right where the truths overlap, being on both is not a swap.
+        assert_eq!(identity_swaps(&[vec![Some(a)]], &[vec![a], vec![a]]), 0);
+        // A hidden target's empty truth is on nothing.
+        assert_eq!(identity_swaps(&[vec![Some(b)], vec![Some(b)]], &[vec![BoundingBox::default()], vec![b]]), 1);
     }
 }

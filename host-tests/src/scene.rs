@@ -10,7 +10,7 @@
 //! The same spec always produces the same bytes (seeded xoshiro, no clocks),
 //! which a test checks against the committed fixtures.
 
-use crate::fixture::{Fixture, FixtureFrame};
+use crate::fixture::{Fixture, FixtureFrame, RecordMeta};
 use pftrack::frame::{rgb_to_rgb565, rgb_to_yuv};
 use pftrack::{BoundingBox, PixelFormat};
 use rand_core::{Rng, SeedableRng};
@@ -48,6 +48,18 @@ pub enum Story {
     /// The speed audit's scene: a round target of 1/8 of the frame width
     /// (40x40 px in QVGA) on a smooth path, at any resolution.
     Audit,
+    /// Two targets of the same colours and stripes cross on one line, the
+    /// faster one in front.
+    Crossing,
+    /// Three targets of different colours, apart; the third leaves through
+    /// the right edge, stays away and comes back.
+    ThreeTargets,
+    /// Two targets of different colours start side by side, touching, and
+    /// move apart.
+    Touching,
+    /// The audit's scene with this many targets (2 or 3) of its size, of
+    /// different colours, on paths of their own.
+    AuditTargets(u8),
 }
 
 /// A scene to generate.
@@ -85,13 +97,18 @@ pub fn catalogue() -> Vec<SceneSpec> {
         s("cross_over", Story::CrossOver, PixelFormat::Rgb565, 50, 10),
         s("occlusion_i420", Story::Occlusion, PixelFormat::I420, 44, 11),
         s("fast", Story::Fast, PixelFormat::Rgb565, 40, 12),
+        // Several targets each: apart, so that the tools that take one
+        // target a fixture read `fixtures/*.pft` as before.
+        s("groups/crossing", Story::Crossing, PixelFormat::Rgb565, 48, 13),
+        s("groups/three_targets", Story::ThreeTargets, PixelFormat::Rgb888, 56, 14),
+        s("groups/touching", Story::Touching, PixelFormat::Yuv422, 30, 15),
     ]
 }
 
 /// The audits' scenes (generated on demand, not committed): QVGA RGB565
-/// with a 40x40 target, and the same scene in QQVGA GRAY8 (the speed
-/// audit), QQVGA RGB565 and QVGA GRAY8 (the largest frames of each format
-/// the STM32F405 build holds).
+/// with a 40x40 target, alone and with one or two more (the group audit),
+/// and the same scene in QQVGA GRAY8 (the speed audit), QQVGA RGB565 and
+/// QVGA GRAY8 (the largest frames of each format the STM32F405 build holds).
 pub fn audit_catalogue() -> Vec<SceneSpec> {
     let audit = |name, format, width, height| SceneSpec {
         name,
@@ -113,6 +130,16 @@ pub fn audit_catalogue() -> Vec<SceneSpec> {
             height: 240,
             frames: 20,
             seed: 7,
+        },
+        SceneSpec {
+            name: "audit_qvga_rgb565_2",
+            story: Story::AuditTargets(2),
+            ..audit("", PixelFormat::Rgb565, 320, 240)
+        },
+        SceneSpec {
+            name: "audit_qvga_rgb565_3",
+            story: Story::AuditTargets(3),
+            ..audit("", PixelFormat::Rgb565, 320, 240)
         },
         SceneSpec {
             name: "audit_qqvga_gray8",
@@ -146,6 +173,22 @@ const BODY: [f64; 3] = [215.0, 45.0, 35.0];
 const STRIPE: [f64; 3] = [235.0, 200.0, 40.0];
 const OCCLUDER: [f64; 3] = [70.0, 85.0, 115.0];
 
+/// Colours of the other targets of a scene with several, by kind: body
+/// and stripe (kind 0 is the target's own, [`BODY`] and [`STRIPE`]).
+const KINDS: [[[f64; 3]; 2]; 3] =
+    [[BODY, STRIPE], [[35.0, 60.0, 215.0], [235.0, 235.0, 235.0]], [[240.0, 140.0, 30.0], [110.0, 30.0, 150.0]]];
+
+/// Another target of a scene with several.
+#[derive(Debug, Clone, Copy)]
+struct Blob {
+    cx: f64,
+    cy: f64,
+    a: f64,
+    b: f64,
+    /// Its colours, in [`KINDS`].
+    kind: usize,
+}
+
 /// Where everything is in frame `t`.
 #[derive(Debug, Clone, Copy)]
 struct Layout {
@@ -160,11 +203,15 @@ struct Layout {
     distractor: Option<(f64, f64)>,
     /// Global illumination gain.
     gain: f64,
+    /// The other targets of a scene with several, drawn behind the first
+    /// in this order.
+    others: [Option<Blob>; 2],
 }
 
 fn layout(story: Story, t: usize, n: usize, (w, h): (usize, usize)) -> Layout {
     let tf = t as f64;
-    let base = Layout { cx: 64.0, cy: 48.0, a: 11.0, b: 13.0, occluder: None, distractor: None, gain: 1.0 };
+    let base =
+        Layout { cx: 64.0, cy: 48.0, a: 11.0, b: 13.0, occluder: None, distractor: None, gain: 1.0, others: [None; 2] };
     match story {
         Story::SmoothScale | Story::GraySmooth => {
             let s = 1.0 + 0.4 * tf / (n as f64 - 1.0).max(1.0);
@@ -202,6 +249,58 @@ fn layout(story: Story, t: usize, n: usize, (w, h): (usize, usize)) -> Layout {
             let phase = (speed * tf) % (2.0 * (hi - lo));
             let cx = if phase < hi - lo { lo + phase } else { hi - (phase - (hi - lo)) };
             Layout { cx, cy: 48.0 + 20.0 * (2.0 * PI * tf / 14.0).sin(), ..base }
+        }
+        Story::Crossing => {
+            // The first at 2 px a frame, the second at 1.5, meeting at
+            // frame 27; 22 px wide, both, and 68 px apart at the end.
+            let other = Blob { cx: 110.0 - 1.5 * tf, cy: 48.0, a: 11.0, b: 13.0, kind: 0 };
+            Layout { cx: 14.0 + 2.0 * tf, others: [Some(other), None], ..base }
+        }
+        Story::ThreeTargets => {
+            // The third leaves through the right edge by frame 16, is out
+            // of the frame for frames 16 to 27, and is wholly back from
+            // frame 34.
+            let x3 = if t < 16 {
+                82.0 + 3.5 * tf
+            } else if t < 28 {
+                200.0
+            } else {
+                139.0 - 3.0 * (tf - 28.0)
+            };
+            let second = Blob { cx: 104.0 - 0.4 * tf, cy: 24.0, a: 10.0, b: 10.0, kind: 1 };
+            let third = Blob { cx: x3, cy: 74.0, a: 10.0, b: 12.0, kind: 2 };
+            Layout {
+                cx: 24.0 + 0.9 * tf,
+                cy: 44.0 + 5.0 * (tf * 0.25).sin(),
+                others: [Some(second), Some(third)],
+                ..base
+            }
+        }
+        Story::Touching => {
+            // Side by side with their outlines touching (22 px wide, 22 px
+            // apart), moving apart at 1.5 px a frame each.
+            let other = Blob { cx: 75.0 + 1.5 * tf, cy: 50.0, a: 11.0, b: 13.0, kind: 1 };
+            Layout { cx: 53.0 - 1.5 * tf, cy: 50.0, others: [Some(other), None], ..base }
+        }
+        Story::AuditTargets(count) => {
+            let one = layout(Story::Audit, t, n, (w, h));
+            let (w, h) = (w as f64, h as f64);
+            let r = w / 16.0;
+            let second = Blob {
+                cx: 0.25 * w + 0.1 * w * (2.0 * PI * tf / 36.0).cos(),
+                cy: 0.25 * h + 0.1 * h * (2.0 * PI * tf / 28.0).sin(),
+                a: r,
+                b: r,
+                kind: 1,
+            };
+            let third = Blob {
+                cx: 0.75 * w + 0.1 * w * (2.0 * PI * tf / 32.0).sin(),
+                cy: 0.78 * h - 0.1 * h * (2.0 * PI * tf / 40.0).cos(),
+                a: r,
+                b: r,
+                kind: 2,
+            };
+            Layout { others: [Some(second), (count >= 3).then_some(third)], ..one }
         }
         Story::Audit => {
             let (w, h) = (w as f64, h as f64);
@@ -264,10 +363,37 @@ fn in_blob(dx: f64, dy: f64, a: f64, b: f64, t: usize) -> bool {
 
 /// The colour of a striped blob at `(dx, dy)` from its centre.
 fn blob_colour(dx: f64, dy: f64, b: f64, horizontal: bool) -> [f64; 3] {
+    kind_colour(dx, dy, b, horizontal, 0)
+}
+
+/// [`blob_colour`] in the colours of [`KINDS`]`[kind]`.
+fn kind_colour(dx: f64, dy: f64, b: f64, horizontal: bool, kind: usize) -> [f64; 3] {
     // Three stripes per axis, fixed to the blob so they move and scale with it.
     let u = if horizontal { dy } else { dx };
     let band = ((u + b) / (2.0 * b / 5.0)).floor() as i64;
-    if band.rem_euclid(2) == 1 { STRIPE } else { BODY }
+    let [body, stripe] = KINDS[kind];
+    if band.rem_euclid(2) == 1 { stripe } else { body }
+}
+
+/// Per mille of the nominal ellipse `(cx, cy, a, b)` that is in a `w × h`
+/// frame and not `hidden`.
+fn visibility((cx, cy, a, b): (f64, f64, f64, f64), (w, h): (usize, usize), hidden: impl Fn(f64, f64) -> bool) -> u16 {
+    let (mut total, mut seen) = (0u32, 0u32);
+    let (x0, x1) = ((cx - a).floor() as i64, (cx + a).ceil() as i64);
+    let (y0, y1) = ((cy - b).floor() as i64, (cy + b).ceil() as i64);
+    for y in y0..=y1 {
+        for x in x0..=x1 {
+            let (px, py) = (x as f64 + 0.5, y as f64 + 0.5);
+            if ((px - cx) / a).powi(2) + ((py - cy) / b).powi(2) <= 1.0 {
+                total += 1;
+                let on = x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h;
+                if on && !hidden(px, py) {
+                    seen += 1;
+                }
+            }
+        }
+    }
+    if total == 0 { 0 } else { (seen as u64 * 1000 / total as u64) as u16 }
 }
 
 /// A textured background: smooth colour patches from bilinear value noise,
@@ -316,6 +442,12 @@ pub fn generate(spec: &SceneSpec) -> Fixture {
                 // Pixel centres, in the continuous coordinates of the ground truth.
                 let (px, py) = (x as f64 + 0.5, y as f64 + 0.5);
                 let mut c = bg[y * w + x];
+                for o in l.others.iter().flatten() {
+                    let (dx, dy) = (px - o.cx, py - o.cy);
+                    if in_blob(dx, dy, o.a, o.b, t + 3) {
+                        c = kind_colour(dx, dy, o.b, true, o.kind);
+                    }
+                }
                 if let Some((dx0, dy0)) = l.distractor {
                     let (dx, dy) = (px - dx0, py - dy0);
                     if in_blob(dx, dy, l.a, l.b, t + 5) {
@@ -342,26 +474,35 @@ pub fn generate(spec: &SceneSpec) -> Fixture {
             }
         }
         // Visibility: nominal-ellipse pixels (on or off frame) that are on the
-        // frame and not under the occluder.
-        let (mut total, mut seen) = (0u32, 0u32);
-        let (x0, x1) = ((l.cx - l.a).floor() as i64, (l.cx + l.a).ceil() as i64);
-        let (y0, y1) = ((l.cy - l.b).floor() as i64, (l.cy + l.b).ceil() as i64);
-        for y in y0..=y1 {
-            for x in x0..=x1 {
-                let (px, py) = (x as f64 + 0.5, y as f64 + 0.5);
-                if ((px - l.cx) / l.a).powi(2) + ((py - l.cy) / l.b).powi(2) <= 1.0 {
-                    total += 1;
-                    let on = x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h;
-                    if on && !occluded(px, py) {
-                        seen += 1;
-                    }
+        // frame and not under the occluder, nor under a target drawn in front.
+        let visible_permille = visibility((l.cx, l.cy, l.a, l.b), (w, h), occluded);
+        let others = l
+            .others
+            .iter()
+            .enumerate()
+            .filter_map(|(i, o)| o.map(|o| (i, o)))
+            .map(|(i, o)| {
+                let in_front = |px: f64, py: f64| {
+                    in_blob(px - l.cx, py - l.cy, l.a, l.b, t)
+                        || l.others.iter().skip(i + 1).flatten().any(|f| in_blob(px - f.cx, py - f.cy, f.a, f.b, t + 3))
+                };
+                RecordMeta {
+                    truth: BoundingBox::new(
+                        (o.cx - o.a) as f32,
+                        (o.cy - o.b) as f32,
+                        (2.0 * o.a) as f32,
+                        (2.0 * o.b) as f32,
+                    ),
+                    visible_permille: visibility((o.cx, o.cy, o.a, o.b), (w, h), |x, y| {
+                        occluded(x, y) || in_front(x, y)
+                    }),
                 }
-            }
-        }
-        let visible_permille = if total == 0 { 0 } else { (seen as u64 * 1000 / total as u64) as u16 };
+            })
+            .collect();
         frames.push(FixtureFrame {
             truth: BoundingBox::new((l.cx - l.a) as f32, (l.cy - l.b) as f32, (2.0 * l.a) as f32, (2.0 * l.b) as f32),
             visible_permille,
+            others,
             pixels: encode(&rgb, w, h, spec.format),
         });
     }

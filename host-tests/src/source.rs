@@ -438,8 +438,10 @@ impl FrameSource for FixtureStream {
         if got < self.buf.len() {
             return Err(format!("frame {n}: the fixture ends {got} bytes into its {}-byte record", self.buf.len()));
         }
-        let (meta, pixels) = self.buf.split_at(RECORD_META_LEN);
-        RecordMeta::parse(meta, self.read as u32).map_err(|e| e.to_string())?;
+        let (meta, pixels) = self.buf.split_at(self.header.meta_len());
+        for m in meta.chunks(RECORD_META_LEN) {
+            RecordMeta::parse(m, self.read as u32).map_err(|e| e.to_string())?;
+        }
         self.read = n;
         let h = self.header;
         Frame::new(pixels, h.width, h.height, h.stride, h.format).map(Some).map_err(|e| format!("frame {n}: {e}"))
@@ -467,7 +469,9 @@ pub fn fixture_truth(path: &Path) -> Result<Vec<BoundingBox>, String> {
         let got = fill(&mut file, &mut meta).map_err(err)?;
         let m = RecordMeta::parse(meta.get(..got).unwrap_or_default(), i).map_err(|e| err(e.to_string()))?;
         truth.push(if m.visible_permille == 0 { BoundingBox::default() } else { m.truth });
-        file.seek(SeekFrom::Current(header.frame_len() as i64)).map_err(|e| err(e.to_string()))?;
+        // Over the other targets' truths and the pixels.
+        let skip = header.record_len() - RECORD_META_LEN;
+        file.seek(SeekFrom::Current(skip as i64)).map_err(|e| err(e.to_string()))?;
     }
     Ok(truth)
 }

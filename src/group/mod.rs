@@ -48,15 +48,22 @@ pub(crate) const APART: Real = 0.5;
 
 /// The factor a hypothesis `e`'s similarity keeps beside the regions
 /// `held` by other targets, when its own target is expected at `own`:
-/// `1 - APART ·` how much more of its box one of them covers than `own`
-/// does. Where the targets' regions overlap, a hypothesis is discounted
-/// only on the side nearer another's: two targets that meet split the
-/// overlap between them instead of pushing each other back.
+/// `1 - APART ·` how much more of its core one of their cores covers than
+/// `own`'s does. Where the targets' regions overlap, a hypothesis is
+/// discounted only on the side nearer another's: two targets that meet
+/// split the overlap between them instead of pushing each other back.
 pub(crate) fn apart(e: &Ellipse, own: Option<&Ellipse>, held: &[Ellipse]) -> Real {
-    let mine = e.to_box();
-    let base = own.map_or(0.0, |o| mine.covered_by(&o.to_box()));
-    let covered = held.iter().fold(0.0 as Real, |c, h| c.max(mine.covered_by(&h.to_box())));
+    let mine = core(e);
+    let base = own.map_or(0.0, |o| mine.covered_by(&core(o)));
+    let covered = held.iter().fold(0.0 as Real, |c, h| c.max(mine.covered_by(&core(h))));
     1.0 - APART * (covered - base).max(0.0)
+}
+
+/// The box inscribed in an ellipse: its core, which two targets whose
+/// outlines merely touch do not share.
+fn core(e: &Ellipse) -> BoundingBox {
+    let k = core::f32::consts::FRAC_1_SQRT_2;
+    Ellipse { hx: k * e.hx, hy: k * e.hy, ..*e }.to_box()
 }
 
 /// One member: a target's identity and state.

@@ -1,4 +1,5 @@
-//! Writes the committed fixture set (`fixtures/*.pft`) from the scene
+//! Writes the committed fixture set (`fixtures/*.pft`, and the scenes of
+//! several targets in `fixtures/groups/`) from the scene
 //! generator, or checks that the committed files are what it generates.
 
 use clap::Parser;
@@ -52,7 +53,9 @@ fn main() -> ExitCode {
                     ok = false;
                 }
             }
-        } else if let Err(e) = std::fs::write(&path, &bytes) {
+        } else if let Err(e) =
+            path.parent().map_or(Ok(()), std::fs::create_dir_all).and_then(|_| std::fs::write(&path, &bytes))
+        {
             eprintln!("error: {}: {e}", path.display());
             ok = false;
         } else {
