@@ -1,15 +1,22 @@
 #!/usr/bin/env python3
 """Runs OpenCV's trackers on OTB sequences and writes their tracks in the
 format `track score` reads: <out>/<tracker>/<sequence>.txt (x,y,w,h per frame,
-the first being the initial box) and <sequence>.ms (median ms per update).
+the first being the initial box), <sequence>.ms (median ms per update) and,
+for a tracker with a confidence of its own, <sequence>.confidence (one per
+update, as `track otb` writes pftrack's).
 
-Trackers: CSRT, KCF, MIL, MOSSE (opencv-contrib's legacy API), and the
-classic meanShift / CamShift on a hue back-projection (the OpenCV tutorial's
-recipe: hue histogram of the initial box, masked to saturated, not-too-dark
-pixels). A tracker that reports failure keeps its last box, so every frame
-has one, as OTB's one-pass evaluation expects.
+Trackers: CSRT, KCF, MIL, MOSSE (opencv-contrib's legacy API), the classic
+meanShift / CamShift on a hue back-projection (the OpenCV tutorial's recipe:
+hue histogram of the initial box, masked to saturated, not-too-dark pixels),
+and with --nanotrack NanoTrack (cv2.TrackerNano, a Siamese network; its
+confidence is getTrackingScore()). A tracker that reports failure keeps its
+last box, so every frame has one, as OTB's one-pass evaluation expects.
 
-Usage: opencv_trackers.py --out DIR [--only NAMES] [--perturb DX,DY,SCALE] SEQ_DIR...
+Usage: opencv_trackers.py --out DIR [--only NAMES] [--perturb DX,DY,SCALE]
+                          [--nanotrack MODEL_DIR] SEQ_DIR...
+
+--nanotrack names the folder with NanoTrack's nanotrack_backbone_sim.onnx
+and nanotrack_head_sim.onnx; without it NanoTrack is not run.
 
 --perturb starts every tracker from the first box moved by DX of its width
 and DY of its height and scaled by SCALE about its centre, as `track otb
@@ -108,6 +115,33 @@ class HueShift:
         return self.box
 
 
+class Nano:
+    """NanoTrack (OpenCV's TrackerNano) with its two ONNX files from `models`."""
+
+    FILES = ("nanotrack_backbone_sim.onnx", "nanotrack_head_sim.onnx")
+
+    def __init__(self, models):
+        self.params = cv2.TrackerNano_Params()
+        self.params.backbone, self.params.neckhead = (str(models / f) for f in self.FILES)
+
+    def init(self, img, box):
+        self.failures = 0
+        self.scores = []
+        self.t = cv2.TrackerNano.create(self.params)
+        self.t.init(img, tuple(int(round(v)) for v in box))
+        self.box = box
+
+    def update(self, img):
+        ok, box = self.t.update(img)
+        if ok:
+            self.box = tuple(float(v) for v in box)
+        else:
+            self.failures += 1
+        # Read after the update: the score of the box it just chose.
+        self.scores.append(float(self.t.getTrackingScore()))
+        return self.box
+
+
 TRACKERS = {
     "CSRT": lambda: Legacy("CSRT"),
     "KCF": lambda: Legacy("KCF"),
@@ -115,6 +149,7 @@ TRACKERS = {
     "MOSSE": lambda: Legacy("MOSSE"),
     "meanShift": lambda: HueShift(cam=False),
     "CamShift": lambda: HueShift(cam=True),
+    "NanoTrack": None,  # needs --nanotrack; made in main()
 }
 
 
@@ -123,8 +158,15 @@ def main():
     ap.add_argument("--out", required=True, type=pathlib.Path)
     ap.add_argument("--only", help="comma-separated tracker names")
     ap.add_argument("--perturb", metavar="DX,DY,SCALE", help="change the first box (see above)")
+    ap.add_argument("--nanotrack", type=pathlib.Path, metavar="MODEL_DIR", help="NanoTrack's ONNX files")
     ap.add_argument("seqs", nargs="+", type=pathlib.Path)
     args = ap.parse_args()
+    makers = dict(TRACKERS)
+    if args.nanotrack:
+        missing = [f for f in Nano.FILES if not (args.nanotrack / f).is_file()]
+        if missing:
+            sys.exit(f"error: --nanotrack {args.nanotrack}: no {', '.join(missing)}")
+        makers["NanoTrack"] = lambda: Nano(args.nanotrack)
     change = (0.0, 0.0, 1.0)
     if args.perturb:
         try:
@@ -133,10 +175,12 @@ def main():
             change = ()
         if len(change) != 3 or not all(np.isfinite(change)) or change[2] <= 0:
             sys.exit(f"error: --perturb `{args.perturb}` is not three numbers DX,DY,SCALE with SCALE above 0")
-    names = args.only.split(",") if args.only else list(TRACKERS)
+    names = args.only.split(",") if args.only else [n for n, make in makers.items() if make]
     unknown = [n for n in names if n not in TRACKERS]
     if unknown:
         sys.exit(f"error: unknown tracker(s) {', '.join(unknown)}; known: {', '.join(TRACKERS)}")
+    if "NanoTrack" in names and not makers["NanoTrack"]:
+        sys.exit("error: NanoTrack needs --nanotrack MODEL_DIR")
     cv2.setNumThreads(1)  # per-frame times comparable with the single-threaded core
     for seq in args.seqs:
         # Bad input is a one-line error naming the sequence, not a traceback.
@@ -152,7 +196,7 @@ def main():
             sys.exit(f"error: {seq}: an image could not be decoded")
         start = perturbed(truth[0], *change)
         for name in names:
-            tracker = TRACKERS[name]()
+            tracker = makers[name]()
             try:
                 tracker.init(images[0], start)
             except (ValueError, cv2.error) as e:
@@ -167,6 +211,8 @@ def main():
             out.mkdir(parents=True, exist_ok=True)
             (out / f"{seq.name}.txt").write_text("".join(f"{x:.2f},{y:.2f},{w:.2f},{h:.2f}\n" for x, y, w, h in boxes))
             (out / f"{seq.name}.ms").write_text(f"{statistics.median(times):.4f}\n")
+            if hasattr(tracker, "scores"):
+                (out / f"{seq.name}.confidence").write_text("".join(f"{s!r}\n" for s in tracker.scores))
             failed = getattr(tracker, "failures", 0)
             print(
                 f"{seq.name:>10} {name:>9}: {statistics.median(times):8.3f} ms/frame, "

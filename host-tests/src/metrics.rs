@@ -154,6 +154,11 @@ impl Awareness {
         self.samples.extend_from_slice(&other.samples);
     }
 
+    /// The share of scored frames that miss the target (`None` without any).
+    pub fn missing_share(&self) -> Option<f64> {
+        (!self.samples.is_empty()).then(|| self.missing as f64 / self.samples.len() as f64)
+    }
+
     /// The share of missing frames reported not tracking (`None` without any).
     pub fn missing_reported(&self) -> Option<f64> {
         (self.missing > 0).then(|| self.missing_flagged as f64 / self.missing as f64)
@@ -322,6 +327,8 @@ mod tests {
         a.add(&half, false, 0.5, &t);
         a.add(&far, true, 0.1, &BoundingBox::default()); // no target: skipped
         assert_eq!((a.missing, a.missing_flagged, a.good, a.good_flagged), (2, 1, 2, 1));
+        // Two of the four scored frames miss; the frame without a target is not counted.
+        assert_eq!(a.missing_share(), Some(0.5));
         assert_eq!(a.missing_reported(), Some(0.5));
         assert_eq!(a.good_reported_lost(), Some(0.5));
         // Pairs (not missing, missing): (0.9, 0.2) yes, (0.9, 0.95) no,
@@ -338,6 +345,24 @@ mod tests {
         assert_eq!(c.roc_auc(), Some(1.0), "perfect separation");
         c.merge(&b);
         assert_eq!(c.samples.len(), 4);
+    }
+
+    #[test]
+    fn missing_share_by_hand() {
+        // Reason: by hand. Truth is a 10x10 box at the origin. A box moved
+        // 9 px right overlaps 1x10: IoU 10/190 ≈ 0.053, missing. One moved
+        // 8 px: IoU 20/180 ≈ 0.111, not missing (0.1 is the bound). Exact
+        // and disjoint boxes: 1 and 0. Missing: 2 of 4 frames.
+        let t = BoundingBox::new(0.0, 0.0, 10.0, 10.0);
+        let mut a = Awareness::default();
+        for x in [9.0, 8.0, 0.0, 50.0] {
+            a.add(&BoundingBox::new(x, 0.0, 10.0, 10.0), true, 0.0, &t);
+        }
+        assert_eq!(a.missing, 2);
+        assert_eq!(a.missing_share(), Some(0.5));
+        // A constant confidence tells nothing: every pair ties.
+        assert_eq!(a.roc_auc(), Some(0.5));
+        assert_eq!(Awareness::default().missing_share(), None);
     }
 
     #[test]

@@ -31,6 +31,21 @@ pub fn parse_groundtruth(text: &str) -> Result<Vec<BoundingBox>, String> {
     Ok(out)
 }
 
+/// Parses a track's confidences (`<sequence>.confidence` beside its boxes):
+/// one number per line, for each frame after the first (the first box is
+/// given, not tracked). Blank lines are skipped. Errors name the line.
+pub fn parse_confidences(text: &str) -> Result<Vec<f32>, String> {
+    let mut out = Vec::new();
+    for (i, line) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let v = line.trim().parse::<f32>().map_err(|_| format!("line {}: `{}` is not a number", i + 1, line.trim()))?;
+        if v.is_nan() {
+            return Err(format!("line {}: NaN is not a confidence", i + 1));
+        }
+        out.push(v);
+    }
+    Ok(out)
+}
+
 /// The frame files of a sequence (in its `img/`), sorted by name.
 pub fn list_images(dir: &Path) -> Result<Vec<PathBuf>, String> {
     images_in(&dir.join("img"))
@@ -190,6 +205,14 @@ mod tests {
         assert!(parse_groundtruth("1,2,3\n").unwrap_err().contains("line 1"));
         assert!(parse_groundtruth("1,2,3,4\n1,2,x,4").unwrap_err().contains("line 2"));
         assert!(parse_groundtruth("").is_err());
+    }
+
+    #[test]
+    fn confidences_and_errors() {
+        assert_eq!(parse_confidences("0.5\n\n 1\n0.25 \n").unwrap(), vec![0.5, 1.0, 0.25]);
+        assert_eq!(parse_confidences("").unwrap(), Vec::<f32>::new());
+        assert!(parse_confidences("0.5\nx\n").unwrap_err().contains("line 2"));
+        assert!(parse_confidences("NaN\n").unwrap_err().contains("line 1"));
     }
 
     #[test]

@@ -51,8 +51,9 @@ impl DrawTarget for Canvas {
     }
 }
 
-/// Distinct colours for up to 10 curves (then they repeat).
-const PALETTE: [Rgb888; 10] = [
+/// Distinct colours for up to 12 curves (then they repeat): `compare/run`
+/// draws 11.
+const PALETTE: [Rgb888; 12] = [
     Rgb888::new(220, 20, 20),
     Rgb888::new(20, 90, 220),
     Rgb888::new(20, 160, 60),
@@ -63,6 +64,8 @@ const PALETTE: [Rgb888; 10] = [
     Rgb888::new(230, 60, 160),
     Rgb888::new(100, 100, 100),
     Rgb888::new(160, 160, 0),
+    Rgb888::new(0, 0, 0),
+    Rgb888::new(110, 190, 255),
 ];
 
 /// Draws `curves` over `xs` (y in [0, 1]) into a PNG at `path`. Curves are

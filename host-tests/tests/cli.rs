@@ -89,3 +89,40 @@ fn score_breaks_the_overlap_down_into_size_and_centre() {
     assert!(stdout.contains("| mine | 0.397 | 0.635 (+0.238) | 0.714 (+0.317) |"), "{stdout}");
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[test]
+fn score_ranks_missing_frames_by_each_trackers_confidence() {
+    // Reason: by hand, a 10x10 target at the origin over five frames. The
+    // first box is given, not tracked: it is left out though it misses.
+    // Then an exact box, a disjoint one, one 5 px off (IoU 1/3) and a
+    // disjoint one: 2 of 4 frames miss (IoU < 0.1), 50.0%. Confidences
+    // 0.9, 0.2, 0.5, 0.6: of the four (not missing, missing) pairs, (0.9,
+    // 0.2), (0.9, 0.6) and (0.5, 0.2) are ranked right, ROC AUC 0.750. A
+    // folder without confidences has no ROC.
+    let dir = std::env::temp_dir().join(format!("pftrack-cli-confidence-{}", std::process::id()));
+    for d in ["seq", "with", "without"] {
+        std::fs::create_dir_all(dir.join(d)).unwrap();
+    }
+    std::fs::write(dir.join("seq/groundtruth.txt"), "0,0,10,10\n".repeat(5)).unwrap();
+    let boxes = "50,50,10,10\n0,0,10,10\n50,50,10,10\n5,0,10,10\n50,50,10,10\n";
+    std::fs::write(dir.join("with/seq.txt"), boxes).unwrap();
+    std::fs::write(dir.join("with/seq.confidence"), "0.9\n0.2\n0.5\n0.6\n").unwrap();
+    std::fs::write(dir.join("without/seq.txt"), boxes).unwrap();
+    let with = format!("with={}", dir.join("with").display());
+    let without = format!("without={}", dir.join("without").display());
+    let (seq, plots) = (dir.join("seq"), dir.join("plots"));
+    let args = |results: &[&str]| {
+        let mut a = vec!["score", "--truth", seq.to_str().unwrap(), "--plots", plots.to_str().unwrap(), "--results"];
+        a.extend_from_slice(results);
+        track(&a)
+    };
+    let (ok, stdout, stderr) = args(&[&with, &without]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("| 50.0% | 0.750 | - |"), "{stdout}");
+    assert!(stdout.contains("| 50.0% | - | - |"), "{stdout}");
+    // One confidence short: an error naming the file, not a shifted ranking.
+    std::fs::write(dir.join("with/seq.confidence"), "0.9\n0.2\n0.5\n").unwrap();
+    let (ok, _, stderr) = args(&[&with]);
+    assert!(!ok && stderr.contains("seq.confidence") && stderr.contains("3 confidences for 5 frames"), "{stderr}");
+    std::fs::remove_dir_all(dir).ok();
+}

@@ -181,16 +181,21 @@ fn run_one(path: &Path, common: &Common) -> Result<(Row, Vec<BoundingBox>, Vec<B
     std::fs::write(&out, text).map_err(|e| format!("{}: {e}", out.display()))?;
     let ms = common.out_dir.join(format!("{}.ms", name));
     std::fs::write(&ms, format!("{:.4}\n", row.ms)).map_err(|e| format!("{}: {e}", ms.display()))?;
+    // The confidence of each update, so `track score` ranks missing frames
+    // by it as it does any other tracker's.
+    let conf = common.out_dir.join(format!("{}.confidence", name));
+    // Every digit an f32 needs: rounded values would tie and move the ROC.
+    let text: String = run.estimates.iter().map(|e| format!("{}\n", e.confidence)).collect();
+    std::fs::write(&conf, text).map_err(|e| format!("{}: {e}", conf.display()))?;
     Ok((row, run.boxes, truth))
 }
 
 /// One line on how well the estimates' states and confidences tell good
 /// frames from missing ones.
 fn describe(a: &Awareness) -> String {
-    let total = a.samples.len().max(1) as f64;
     format!(
-        "missing frames (IoU < 0.1): {:.1}%, of which reported not tracking {}; good frames (IoU >= 0.3) reported not tracking {}; confidence ROC AUC (missing vs the rest) {}",
-        100.0 * a.missing as f64 / total,
+        "missing frames (IoU < 0.1): {}, of which reported not tracking {}; good frames (IoU >= 0.3) reported not tracking {}; confidence ROC AUC (missing vs the rest) {}",
+        pct(a.missing_share()),
         pct(a.missing_reported()),
         pct(a.good_reported_lost()),
         fmt3(a.roc_auc())

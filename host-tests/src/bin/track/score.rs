@@ -1,8 +1,8 @@
 //! `track score`: result sets scored against ground truth, as one table and
 //! the success and precision plots (which `otb` and `fixture` draw too).
 
-use crate::shared::{Split, fmt3};
-use host_tests::metrics::{breakdown, score};
+use crate::shared::{Split, fmt3, pct};
+use host_tests::metrics::{Awareness, breakdown, score};
 use host_tests::otb;
 use pftrack::BoundingBox;
 use std::path::{Path, PathBuf};
@@ -79,6 +79,26 @@ fn read_boxes(path: &Path) -> Result<Vec<BoundingBox>, String> {
     otb::parse_groundtruth(&text).map_err(|e| format!("{}: {e}", path.display()))
 }
 
+/// Reads a track's confidences, one per frame after the first, if the
+/// tracker wrote them (`None` for a tracker without a confidence).
+fn read_confidences(path: &Path, frames: usize) -> Result<Option<Vec<f32>>, String> {
+    let Ok(text) = std::fs::read_to_string(path) else { return Ok(None) };
+    let c = otb::parse_confidences(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    if c.len() + 1 != frames {
+        return Err(format!(
+            "{}: {} confidences for {frames} frames (one per frame after the first)",
+            path.display(),
+            c.len()
+        ));
+    }
+    Ok(Some(c))
+}
+
+/// The mean of some numbers (`None` for none).
+fn mean(v: &[f64]) -> Option<f64> {
+    (!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64)
+}
+
 pub(crate) fn command(
     truth: &[PathBuf],
     results: &[String],
@@ -107,7 +127,11 @@ pub(crate) fn command(
         let mut per_seq = vec![0.0; truths.len()];
         // Means over sequences of the breakdown's two AUCs.
         let mut breakdowns = (0.0, 0.0);
+        // Per folder (a run, e.g. a seed): its frames pooled over sequences,
+        // as `track otb` pools them, and whether every track has confidences.
+        let mut aware = Vec::new();
         for folder in &folders {
+            let (mut pooled, mut confident) = (Awareness::default(), true);
             for ((seq, t), acc) in truths.iter().zip(per_seq.iter_mut()) {
                 let boxes = read_boxes(&folder.join(format!("{seq}.txt")))?;
                 if boxes.len() != t.len() {
@@ -118,6 +142,15 @@ pub(crate) fn command(
                 {
                     ms.push(v);
                 }
+                let conf = read_confidences(&folder.join(format!("{seq}.confidence")), boxes.len())?;
+                confident &= conf.is_some();
+                let conf = conf.unwrap_or_else(|| vec![0.0; boxes.len().saturating_sub(1)]);
+                // The first box is given, not tracked: scored from the second
+                // frame, as `track otb` does. A track file has no tracking
+                // state, so the shares reported not tracking are not printed.
+                for ((b, t), &c) in boxes.iter().zip(t).skip(1).zip(&conf) {
+                    pooled.add(b, true, c, t);
+                }
                 *acc += score(&boxes, t).map_or(0.0, |s| s.auc) / folders.len() as f64;
                 if let Some(b) = breakdown(&boxes, t) {
                     let n = (folders.len() * truths.len()) as f64;
@@ -125,9 +158,14 @@ pub(crate) fn command(
                 }
                 runs.push((boxes, t.clone()));
             }
+            aware.push((pooled, confident));
         }
         let ms = (ms.len() == runs.len()).then(|| ms.iter().sum::<f64>() / ms.len() as f64);
-        sets.push((score_set(&name, &runs, ms)?, per_seq, breakdowns));
+        let missing: Vec<f64> = aware.iter().filter_map(|(a, _)| a.missing_share()).collect();
+        let roc: Vec<f64> = aware.iter().filter(|(_, c)| *c).filter_map(|(a, _)| a.roc_auc()).collect();
+        // A ROC only when every run has confidences: a mean over some seeds would not compare.
+        let roc = if aware.iter().all(|(_, c)| *c) { mean(&roc) } else { None };
+        sets.push((score_set(&name, &runs, ms)?, per_seq, breakdowns, (mean(&missing), roc)));
     }
     let seqs: Vec<&str> = truths.iter().map(|(n, _)| n.as_str()).collect();
     println!("{} sequences: {}", seqs.len(), seqs.join(", "));
@@ -139,30 +177,38 @@ pub(crate) fn command(
     };
     match split {
         Some(_) => {
-            println!("| tracker | tune AUC | check AUC | mean AUC | mean P20 | ms/frame |");
-            println!("|---|---|---|---|---|---|");
+            println!(
+                "| tracker | tune AUC | check AUC | mean AUC | mean P20 | IoU < 0.1 | confidence ROC AUC | ms/frame |"
+            );
+            println!("|---|---|---|---|---|---|---|---|");
         }
         None => {
-            println!("| tracker | mean AUC | mean P20 | ms/frame |");
-            println!("|---|---|---|---|");
+            println!("| tracker | mean AUC | mean P20 | IoU < 0.1 | confidence ROC AUC | ms/frame |");
+            println!("|---|---|---|---|---|---|");
         }
     }
-    let mut order: Vec<&(SetScore, Vec<f64>, (f64, f64))> = sets.iter().collect();
+    type Row = (SetScore, Vec<f64>, (f64, f64), (Option<f64>, Option<f64>));
+    let mut order: Vec<&Row> = sets.iter().collect();
     order.sort_by(|a, b| b.0.auc.total_cmp(&a.0.auc));
-    for (r, per_seq, _) in order.iter().copied() {
+    for (r, per_seq, _, (missing, roc)) in order.iter().copied() {
         let ms = r.ms.map(|m| format!("{m:.3}")).unwrap_or_else(|| "-".to_string());
+        let (missing, roc) = (pct(*missing), fmt3(*roc));
         match split {
             Some(sp) => println!(
-                "| {} | {} | {} | {:.3} | {:.3} | {ms} |",
+                "| {} | {} | {} | {:.3} | {:.3} | {missing} | {roc} | {ms} |",
                 r.name,
                 mean_of(per_seq, &sp.tune),
                 mean_of(per_seq, &sp.check),
                 r.auc,
                 r.p20
             ),
-            None => println!("| {} | {:.3} | {:.3} | {ms} |", r.name, r.auc, r.p20),
+            None => println!("| {} | {:.3} | {:.3} | {missing} | {roc} | {ms} |", r.name, r.auc, r.p20),
         }
     }
+    println!();
+    println!(
+        "IoU < 0.1: the share of frames after the first that miss the target; confidence ROC AUC: how well the tracker's own confidence (written beside its boxes as <sequence>.confidence) ranks those frames below the rest, `-` without one (frames pooled over a run's sequences, averaged over runs)"
+    );
     println!();
     println!(
         "Where the overlap is lost (mean AUC over sequences, each box given the truth's size about its own centre, or moved to the truth's centre at its own size):"
@@ -170,11 +216,11 @@ pub(crate) fn command(
     println!();
     println!("| tracker | mean AUC | with the truth's size | with the truth's centre |");
     println!("|---|---|---|---|");
-    for (r, per_seq, (size, centre)) in order {
+    for (r, per_seq, (size, centre), _) in order {
         let auc = per_seq.iter().sum::<f64>() / per_seq.len().max(1) as f64;
         println!("| {} | {auc:.3} | {size:.3} ({:+.3}) | {centre:.3} ({:+.3}) |", r.name, size - auc, centre - auc);
     }
     std::fs::create_dir_all(plots).map_err(|e| format!("{}: {e}", plots.display()))?;
-    let sets: Vec<SetScore> = sets.into_iter().map(|(s, _, _)| s).collect();
+    let sets: Vec<SetScore> = sets.into_iter().map(|(s, _, _, _)| s).collect();
     draw_plots(&sets, plots, &format!("{} sequences", seqs.len()))
 }
