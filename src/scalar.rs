@@ -188,11 +188,15 @@ pub fn isqrt(x: u32) -> u32 {
 }
 
 /// Whether the target divides in hardware: every host, and the hard-float
-/// Cortex-M targets (ARMv7E-M: Cortex-M4F and M7). The other ARM targets
-/// this crate is built for (Cortex-M0+, ARMv6 Linux) have no divider; an
-/// ARM target wrongly counted among them still computes the same results,
-/// a little slower.
-pub(crate) const HARDWARE_DIVIDE: bool = !cfg!(target_arch = "arm") || cfg!(target_abi = "eabihf");
+/// bare-metal Cortex-M targets (ARMv7E-M: Cortex-M4F and M7). The other ARM
+/// targets this crate is built for (Cortex-M0+, and the ARM11s of ARMv6
+/// Linux, hard-float for the Raspberry Pi Zero) have no divider; an ARM
+/// target wrongly counted among them still computes the same results, a
+/// little slower. Hard float alone does not tell: the ARM1176 has a VFP and
+/// no integer divider. (Which ARM features a build has is unstable in
+/// `cfg`, so the test is on the target's OS and ABI.)
+pub(crate) const HARDWARE_DIVIDE: bool =
+    !cfg!(target_arch = "arm") || cfg!(all(target_os = "none", target_abi = "eabihf"));
 
 /// [`isqrt`] with one division: the table's guess (within 0.4% of the
 /// root), one integer Newton step `⌊(y + ⌊x / y⌋) / 2⌋`, which is
