@@ -102,7 +102,7 @@ pub use filter::{Dynamics, Particle, Resampling};
 pub use foreground::BackgroundWeight;
 pub use frame::{Frame, Plane};
 pub use geometry::{BoundingBox, Ellipse};
-pub use group::{Added, Group, TargetId, Tracked};
+pub use group::{Added, Group, TargetId, Tracked, Tracks};
 pub use histogram::{Histogram, Model, SUPPORT_WORDS, Similarity};
 pub use likelihood::{Combination, Likelihood, Shape, Sigma};
 pub use meanshift::{MeanShift, MeanShiftConfig, Prediction};

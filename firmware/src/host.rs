@@ -118,16 +118,41 @@ impl FixtureStream {
     }
 
     /// Reads frame `index` (the next one) into `pixels`, which must hold
-    /// `header.frame_len()` bytes, and returns its ground truth and visibility.
-    pub fn next(&mut self, index: u32, pixels: &mut [u8]) -> Result<pftrack_fixture::RecordMeta, StreamError> {
+    /// `header.frame_len()` bytes, and returns its first target's ground
+    /// truth and visibility; the other targets' truths of a fixture with
+    /// several go into `others` (which must hold `header.targets - 1`).
+    pub fn next(
+        &mut self,
+        index: u32,
+        pixels: &mut [u8],
+        others: &mut [pftrack::BoundingBox],
+    ) -> Result<pftrack_fixture::RecordMeta, StreamError> {
         use pftrack_fixture::{FixtureError, RECORD_META_LEN, RecordMeta};
+        let expected_len = self.header.record_len();
+        let truncated =
+            |got| StreamError::Fixture(FixtureError::TruncatedFrame { index, expected_len, actual_len: got });
         let mut meta = [0u8; RECORD_META_LEN];
-        let got = self.file.read(&mut meta);
-        let got = if got == RECORD_META_LEN { got + self.file.read(pixels) } else { got };
-        let expected_len = RECORD_META_LEN + pixels.len();
-        if got < expected_len {
-            return Err(StreamError::Fixture(FixtureError::TruncatedFrame { index, expected_len, actual_len: got }));
+        let mut got = self.file.read(&mut meta);
+        if got < RECORD_META_LEN {
+            return Err(truncated(got));
         }
-        RecordMeta::parse(&meta, index).map_err(StreamError::Fixture)
+        let first = RecordMeta::parse(&meta, index).map_err(StreamError::Fixture)?;
+        for k in 1..self.header.targets as usize {
+            let mut m = [0u8; RECORD_META_LEN];
+            let n = self.file.read(&mut m);
+            got += n;
+            if n < RECORD_META_LEN {
+                return Err(truncated(got));
+            }
+            let truth = RecordMeta::parse(&m, index).map_err(StreamError::Fixture)?.truth;
+            if let Some(o) = others.get_mut(k - 1) {
+                *o = truth;
+            }
+        }
+        got += self.file.read(pixels);
+        if got < RECORD_META_LEN * self.header.targets as usize + pixels.len() {
+            return Err(truncated(got));
+        }
+        Ok(first)
     }
 }

@@ -14,6 +14,7 @@
 // Shared with the pan-tilt example, which uses the rest of it.
 #[allow(dead_code)]
 mod board;
+mod group;
 mod host;
 
 use core::fmt::Write;
@@ -109,6 +110,9 @@ fn run() -> bool {
 
     let Some(pixels) = cortex_m::singleton!(: [u8; FRAME_BYTES] = [0; FRAME_BYTES]) else { fail!("buffer taken") };
     let Some(ticks) = cortex_m::singleton!(: [u32; MAX_FRAMES] = [0; MAX_FRAMES]) else { fail!("buffer taken") };
+    if h.targets > 1 {
+        return group::run(&mut out, &mut stream, (&mut pixels[..frame_len], ticks), (path, seed, kind));
+    }
     let made = match kind {
         "pf" => make_tracker(seed).map(|t| t.map(Any::Pf)),
         #[cfg(feature = "all-options")]
@@ -124,10 +128,7 @@ fn run() -> bool {
     };
 
     let Some(mut cp) = cortex_m::Peripherals::take() else { fail!("peripherals taken") };
-    cp.SYST.set_clock_source(SystClkSource::Core);
-    cp.SYST.set_reload(0x00ff_ffff);
-    cp.SYST.clear_current();
-    cp.SYST.enable_counter();
+    start_systick(&mut cp);
 
     let _ = writeln!(out, "board {}", board::NAME);
     let _ = writeln!(out, "fixture {path} {width}x{height} {format:?} frames {count} seed {seed} tracker {kind}");
@@ -136,7 +137,7 @@ fn run() -> bool {
     let mut measured = 0usize;
     for i in 0..count as usize {
         let buf = &mut pixels[..frame_len];
-        let meta = match stream.next(i as u32, buf) {
+        let meta = match stream.next(i as u32, buf, &mut []) {
             Ok(m) => m,
             Err(e) => fail!("{path}: {e}"),
         };
@@ -172,8 +173,14 @@ fn run() -> bool {
         }
     }
     let peak = stack_floor.map(peak_stack);
+    report(&mut out, &mut ticks[..measured], (init_stack, peak), tracker.ram());
+    true
+}
 
-    let steps = &mut ticks[..measured];
+/// Prints the instruction counts of `steps` (SysTick ticks; sorted here),
+/// the peak stack of initialisation and tracking, and the RAM of the
+/// tracker, then the verdict.
+fn report(out: &mut impl Write, steps: &mut [u32], (init_stack, peak): (Option<usize>, Option<usize>), ram: usize) {
     if let Some(per_tick) = board::INSTRUCTIONS_PER_TICK {
         // Every step in order, so that an outlier frame can be found.
         let _ = write!(out, "instructions per step, in order:");
@@ -198,9 +205,17 @@ fn run() -> bool {
     if let (Some(i), Some(p)) = (init_stack, peak) {
         let _ = writeln!(out, "peak stack: init {i} bytes, step {p} bytes");
     }
-    let _ = writeln!(out, "tracker RAM: {} bytes", tracker.ram());
+    let _ = writeln!(out, "tracker RAM: {ram} bytes");
     let _ = writeln!(out, "ok");
-    true
+}
+
+/// Starts SysTick counting core cycles down from its largest reload, to
+/// count each step's instructions.
+fn start_systick(cp: &mut cortex_m::Peripherals) {
+    cp.SYST.set_clock_source(SystClkSource::Core);
+    cp.SYST.set_reload(0x00ff_ffff);
+    cp.SYST.clear_current();
+    cp.SYST.enable_counter();
 }
 
 /// Builds the tracker into a static. Kept out of line: constructing it needs

@@ -26,6 +26,10 @@ pub struct Tracked {
     pub estimate: Estimate,
 }
 
+/// Every target's estimate from one [`Group::step`], in the order of
+/// [`Group::ids`] (a `heapless::Vec`, iterable as a slice).
+pub type Tracks<const M: usize> = heapless::Vec<Tracked, M>;
+
 /// What [`Group::add`] reports of a new target.
 #[derive(Copy, Clone, Debug)]
 pub struct Added {
@@ -69,7 +73,8 @@ fn core(e: &Ellipse) -> BoundingBox {
 /// One member: a target's identity and state.
 #[derive(Clone, Debug)]
 struct Member<const N: usize, const K: usize, R, const T: usize> {
-    id: TargetId,
+    /// The target's identity; `None` while the place is free.
+    id: Option<TargetId>,
     track: Track<N, K, R, T>,
     /// The estimate's smoothed displacement, pixels a frame, over frames
     /// tracked one after another.
@@ -82,6 +87,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Member<N, K, R, T> 
     /// targets that meet are each pushed along their own way, not back the
     /// way they came.
     fn held(&self) -> Option<Ellipse> {
+        self.id?;
         let e = self.track.held()?;
         Some(Ellipse { cx: e.cx + self.velocity.0, cy: e.cy + self.velocity.1, ..e })
     }
@@ -156,7 +162,8 @@ pub struct Group<
     seed: u64,
     /// Identity of the next target added.
     next: u16,
-    members: [Option<Member<N, K, R, T>>; M],
+    /// Every place, free or not: built once, reused in place.
+    members: [Member<N, K, R, T>; M],
     scratch: Scratch<K, E>,
 }
 
@@ -171,7 +178,12 @@ where
         const { assert!(M >= 1, "a group holds at least one target") }
         // Checked once, with the capacities every member will have.
         Track::<N, K, R, T>::new(config, R::seed_from_u64(seed))?;
-        Ok(Group { config, seed, next: 0, members: [const { None }; M], scratch: Scratch::new() })
+        let members = core::array::from_fn(|_| Member {
+            id: None,
+            track: Track::blank(config, R::seed_from_u64(seed)),
+            velocity: (0.0, 0.0),
+        });
+        Ok(Group { config, seed, next: 0, members, scratch: Scratch::new() })
     }
 
     /// The configuration every target uses.
@@ -181,7 +193,7 @@ where
 
     /// How many targets the group holds.
     pub fn len(&self) -> usize {
-        self.members.iter().flatten().count()
+        self.active().count()
     }
 
     /// Whether the group holds no target.
@@ -191,7 +203,7 @@ where
 
     /// The targets' identities, in the order [`Group::step`] reports them.
     pub fn ids(&self) -> impl Iterator<Item = TargetId> + '_ {
-        self.members.iter().flatten().map(|m| m.id)
+        self.active().filter_map(|m| m.id)
     }
 
     /// The state of target `id`.
@@ -205,29 +217,28 @@ where
     /// the frame size of the first: a frame of another size is
     /// [`Error::FrameSizeChanged`]. On any error the group is unchanged.
     pub fn add(&mut self, frame: &Frame<'_>, bbox: BoundingBox) -> Result<Added, Error> {
-        let slot = self.members.iter().position(Option::is_none).ok_or(Error::GroupFull { capacity: M })?;
-        if let Some(expected) = self.members.iter().flatten().find_map(|m| m.track.frame_size())
-            && expected != (frame.width(), frame.height())
+        let size = (frame.width(), frame.height());
+        if let Some(expected) = self.frame_size()
+            && expected != size
         {
-            return Err(Error::FrameSizeChanged { expected, got: (frame.width(), frame.height()) });
+            return Err(Error::FrameSizeChanged { expected, got: size });
         }
-        let id = TargetId(self.next);
-        let mut track = Track::new(self.config, R::seed_from_u64(self.seed.wrapping_add(id.0 as u64)))?;
-        let estimate = track.init(&mut self.scratch, frame, bbox)?;
         let overlap = self
-            .members
-            .iter()
-            .flatten()
-            .filter_map(|m| Some((m.id, m.track.held()?.to_box().iou(&bbox))))
+            .active()
+            .filter_map(|m| Some((m.id?, m.track.held()?.to_box().iou(&bbox))))
             .filter(|&(_, iou)| iou > 0.0)
             .fold(None, |best: Option<(TargetId, Real)>, o| match best {
                 Some(b) if b.1 >= o.1 => Some(b),
                 _ => Some(o),
             });
-        // The slot was found empty above.
-        if let Some(s) = self.members.get_mut(slot) {
-            *s = Some(Member { id, track, velocity: (0.0, 0.0) });
-        }
+        let id = TargetId(self.next);
+        let Group { members, scratch, seed, .. } = self;
+        let member = members.iter_mut().find(|m| m.id.is_none()).ok_or(Error::GroupFull { capacity: M })?;
+        // In place; the place stays free unless the box is learnt.
+        member.track.reset(R::seed_from_u64(seed.wrapping_add(id.0 as u64)));
+        let estimate = member.track.init(scratch, frame, bbox)?;
+        member.id = Some(id);
+        member.velocity = (0.0, 0.0);
         self.next = self.next.wrapping_add(1);
         Ok(Added { id, estimate, overlap })
     }
@@ -236,20 +247,15 @@ where
     /// identity (as [`crate::Tracker::init`] does for one target).
     pub fn reinit(&mut self, id: TargetId, frame: &Frame<'_>, bbox: BoundingBox) -> Result<Estimate, Error> {
         let Group { members, scratch, .. } = self;
-        let member = members.iter_mut().flatten().find(|m| m.id == id).ok_or(Error::UnknownTarget { id: id.0 })?;
+        let member = members.iter_mut().find(|m| m.id == Some(id)).ok_or(Error::UnknownTarget { id: id.0 })?;
         member.track.init(scratch, frame, bbox)
     }
 
     /// Stops following target `id`; its place is free for another.
     pub fn remove(&mut self, id: TargetId) -> Result<(), Error> {
-        let slot = self.members.iter_mut().find(|m| m.as_ref().is_some_and(|m| m.id == id));
-        match slot {
-            Some(s) => {
-                *s = None;
-                Ok(())
-            }
-            None => Err(Error::UnknownTarget { id: id.0 }),
-        }
+        let member = self.members.iter_mut().find(|m| m.id == Some(id)).ok_or(Error::UnknownTarget { id: id.0 })?;
+        member.id = None;
+        Ok(())
     }
 
     /// Tracks every target on one frame; returns each target's estimate
@@ -259,9 +265,9 @@ where
     /// target's box covers them; a target that is lost or searching is
     /// weighed down on every tracked target's box, so that it does not
     /// re-acquire onto another. The frame must have the group's frame size.
-    pub fn step(&mut self, frame: &Frame<'_>) -> Result<heapless::Vec<Tracked, M>, Error> {
+    pub fn step(&mut self, frame: &Frame<'_>) -> Result<Tracks<M>, Error> {
         let size = (frame.width(), frame.height());
-        if let Some(expected) = self.members.iter().flatten().find_map(|m| m.track.frame_size())
+        if let Some(expected) = self.frame_size()
             && expected != size
         {
             return Err(Error::FrameSizeChanged { expected, got: size });
@@ -270,15 +276,16 @@ where
         // step sees the same ones whatever the order.
         let mut held: [Option<(TargetId, Ellipse)>; M] = [None; M];
         for (h, m) in held.iter_mut().zip(self.members.iter()) {
-            *h = m.as_ref().and_then(|m| Some((m.id, m.held()?)));
+            *h = m.id.zip(m.held());
         }
-        let mut out = heapless::Vec::new();
+        let mut out = Tracks::new();
         let Group { members, scratch, .. } = self;
-        for m in members.iter_mut().flatten() {
+        for m in members.iter_mut() {
+            let Some(me) = m.id else { continue };
             let mut others = [Ellipse::default(); M];
             let mut n = 0;
             for (id, e) in held.iter().flatten() {
-                if *id != m.id
+                if *id != me
                     && let Some(o) = others.get_mut(n)
                 {
                     *o = *e;
@@ -286,7 +293,7 @@ where
                 }
             }
             let before = m.track.held();
-            let own = held.iter().flatten().find(|(id, _)| *id == m.id).map(|(_, e)| *e);
+            let own = held.iter().flatten().find(|(id, _)| *id == me).map(|(_, e)| *e);
             let estimate = m.track.step_inner(scratch, frame, None, (own, others.get(..n).unwrap_or(&[])))?;
             m.velocity = match (before, m.track.held()) {
                 (Some(b), Some(a)) => {
@@ -296,13 +303,23 @@ where
                 _ => (0.0, 0.0),
             };
             // At most M members, and `out` holds M.
-            let _ = out.push(Tracked { id: m.id, estimate });
+            let _ = out.push(Tracked { id: me, estimate });
         }
         Ok(out)
     }
 
     fn member(&self, id: TargetId) -> Result<&Member<N, K, R, T>, Error> {
-        self.members.iter().flatten().find(|m| m.id == id).ok_or(Error::UnknownTarget { id: id.0 })
+        self.members.iter().find(|m| m.id == Some(id)).ok_or(Error::UnknownTarget { id: id.0 })
+    }
+
+    /// The places that hold a target.
+    fn active(&self) -> impl Iterator<Item = &Member<N, K, R, T>> {
+        self.members.iter().filter(|m| m.id.is_some())
+    }
+
+    /// The frame size of the targets held, if any.
+    fn frame_size(&self) -> Option<(usize, usize)> {
+        self.active().find_map(|m| m.track.frame_size())
     }
 }
 

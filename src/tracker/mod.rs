@@ -229,7 +229,12 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         if config.table.is_some() && T == 0 {
             return Err(ConfigError { field: "table", problem: ParamProblem::OutOfRange }.into());
         }
-        Ok(Track {
+        Ok(Self::blank(config, rng))
+    }
+
+    /// A target's state with a `config` that [`Track::new`] has accepted.
+    pub(crate) fn blank(config: Config, rng: R) -> Self {
+        Track {
             config,
             rng,
             particles: [Particle::default(); N],
@@ -240,7 +245,19 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
             misses: 0,
             diag: Diagnostics::default(),
             cues: Cues::new(),
-        })
+        }
+    }
+
+    /// Forgets the target, in place (a group's member is reused without a
+    /// copy of the whole state passing through the stack), and draws from
+    /// `rng` from here on.
+    pub(crate) fn reset(&mut self, rng: R) {
+        self.rng = rng;
+        self.target = None;
+        self.state = TrackState::Searching;
+        self.misses = 0;
+        self.diag = Diagnostics::default();
+        self.cues = Cues::new();
     }
 
     /// Learns the target from `bbox` in `frame` and starts tracking it there.

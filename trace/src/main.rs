@@ -5,14 +5,21 @@
 //! ARMv6 Linux device (see the README).
 //!
 //! Usage: pftrack-trace FIXTURE [SEED [pf|colour|meanshift|kalman]]
+//!
+//! A fixture of several targets is tracked by a group of them all (the
+//! particle filter; mean shift follows one target), one line per target
+//! and frame: `FRAME TARGET TRACE`.
 
-use pftrack::{Config, Frame, MeanShift, MeanShiftConfig, Tracker};
+use pftrack::{Config, Frame, Group, MeanShift, MeanShiftConfig, Tracker};
 use pftrack_fixture::{HEADER_LEN, Header, RECORD_META_LEN, RecordMeta};
 use std::io::{Read, Write};
 use std::process::ExitCode;
 
 /// The firmware's tracker type (firmware/src/main.rs): the defaults.
 type FwTracker = Tracker<100>;
+
+/// The firmware's group type, for fixtures of several targets.
+type FwGroup = Group<3, 100>;
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -56,6 +63,12 @@ fn run(path: &str, seed: u64, kind: &str) -> Result<(), String> {
         "colour" => Config { correlation: None, ..Config::default() },
         _ => Config::default(),
     };
+    if h.targets > 1 {
+        if ms_config.is_some() {
+            return Err(format!("mean shift follows one target; this fixture has {}", h.targets));
+        }
+        return run_group(file, &h, config, seed);
+    }
     let mut tracker = Box::new(FwTracker::new(config, seed).map_err(|e| e.to_string())?);
     let mut ms: Option<Box<MeanShift>> = match ms_config {
         Some(c) => Some(Box::new(MeanShift::new(c).map_err(|e| e.to_string())?)),
@@ -80,6 +93,42 @@ fn run(path: &str, seed: u64, kind: &str) -> Result<(), String> {
         let est = est.map_err(|e| format!("frame {i}: {e}"))?;
         // A closed pipe is an error to report, not a panic (as println! would).
         writeln!(out, "{i} {}", est.trace()).map_err(|e| format!("standard output: {e}"))?;
+    }
+    Ok(())
+}
+
+/// [`run`] for a fixture of several targets: a group of them all, each
+/// added from its first box in the fixture's order.
+fn run_group(mut file: std::fs::File, h: &Header, config: Config, seed: u64) -> Result<(), String> {
+    let mut group = Box::new(FwGroup::new(config, seed).map_err(|e| e.to_string())?);
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    let mut meta = vec![0u8; h.meta_len()];
+    let mut pixels = vec![0u8; h.frame_len()];
+    for i in 0..h.frames {
+        if file.read_exact(&mut meta).and_then(|_| file.read_exact(&mut pixels)).is_err() {
+            return Err(format!("file ends inside frame {i}"));
+        }
+        let truths = meta
+            .chunks(RECORD_META_LEN)
+            .map(|m| RecordMeta::parse(m, i))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|e| e.to_string())?;
+        let frame = Frame::new(&pixels, h.width, h.height, h.stride, h.format).map_err(|e| e.to_string())?;
+        let mut lines = Vec::new();
+        if i == 0 {
+            for m in &truths {
+                let added = group.add(&frame, m.truth).map_err(|e| format!("frame 0: {e}"))?;
+                lines.push((added.id.0, added.estimate));
+            }
+        } else {
+            for t in group.step(&frame).map_err(|e| format!("frame {i}: {e}"))? {
+                lines.push((t.id.0, t.estimate));
+            }
+        }
+        for (id, est) in lines {
+            writeln!(out, "{i} {id} {}", est.trace()).map_err(|e| format!("standard output: {e}"))?;
+        }
     }
     Ok(())
 }

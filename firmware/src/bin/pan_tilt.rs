@@ -86,7 +86,7 @@ fn run() -> bool {
     let (mut agree, mut moves) = (0u32, 0u32);
     for i in 0..h.frames {
         let buf = &mut pixels[..h.frame_len()];
-        let meta = match stream.next(i, buf) {
+        let meta = match stream.next(i, buf, &mut []) {
             Ok(m) => m,
             Err(e) => fail!("{path}: {e}"),
         };
