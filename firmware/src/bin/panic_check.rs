@@ -8,7 +8,8 @@
 //! the defaults and every optional technique (quadrants, adaptive bins,
 //! intersection, exponential likelihood, the degraded-model rule, boundary
 //! cue, likelihood table, scale prior, surroundings-motion test, correlation
-//! filter), and the mean-shift baselines run too;
+//! filter), and the mean-shift baselines and a group of targets (added,
+//! stepped, re-initialised and removed) run too;
 //! CI links it with and without `--features all-options`, and without the
 //! default `correlation` feature, so the proof covers every build's code.
 #![no_std]
@@ -18,8 +19,8 @@ use cortex_m_rt::entry;
 // The board builds' device crates provide the interrupt vectors their
 // cortex-m-rt expects.
 use pftrack::{
-    Binning, BoundaryCue, BoundingBox, Config, Frame, MeanShift, MeanShiftConfig, ModelUpdate, PixelFormat, ScalePrior,
-    Shape, Similarity, TableMode, Tracker,
+    Binning, BoundaryCue, BoundingBox, Config, Frame, Group, MeanShift, MeanShiftConfig, ModelUpdate, PixelFormat,
+    ScalePrior, Shape, Similarity, TableMode, Tracker,
 };
 use rand_xoshiro::Xoshiro128PlusPlus;
 #[cfg(feature = "rp2040")]
@@ -73,6 +74,34 @@ fn main() -> ! {
                 if let Ok(e) = m.step(&frame) {
                     // SAFETY: OUT is this function's own static.
                     unsafe { core::ptr::write_volatile(&raw mut *OUT, e.confidence) };
+                }
+            }
+        }
+    }
+    if pick & 32 != 0 {
+        // A group of three, its targets added, stepped, re-initialised and
+        // removed as inputs say.
+        if let (Ok(mut g), Ok(frame)) = (
+            Group::<3, 100, 512, 4096, Xoshiro128PlusPlus, 256>::new(config(pick), seed),
+            Frame::new(pixels, 160 - (w & 1) * 2, 120, 320, PixelFormat::Rgb565),
+        ) {
+            let ids = [
+                g.add(&frame, BoundingBox::new(x, x, 20.0, 20.0)),
+                g.add(&frame, BoundingBox::new(x, 2.0 * x, 9.0, 9.0)),
+            ];
+            loop {
+                if let Ok(all) = g.step(&frame) {
+                    for t in &all {
+                        // SAFETY: OUT is this function's own static.
+                        unsafe { core::ptr::write_volatile(&raw mut *OUT, t.estimate.confidence) };
+                    }
+                }
+                if let Ok(a) = &ids[w % 2] {
+                    let _ = if w & 4 != 0 {
+                        g.remove(a.id)
+                    } else {
+                        g.reinit(a.id, &frame, BoundingBox::new(x, x, 5.0, 5.0)).map(|_| ())
+                    };
                 }
             }
         }
