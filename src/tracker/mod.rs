@@ -39,7 +39,7 @@ use search::*;
 /// on small stacks. `E` bounds the per-frame edge map (4-bit cells, one per
 /// sampled pixel of the area the particles cover: 8192 at the default):
 /// when the area has more, edges are kept on a coarser grid, at a cost in
-/// accuracy (see [`EdgeMap`]). It is unused when the edge cue is off.
+/// accuracy (see [`crate::EdgeMap`]). It is unused when the edge cue is off.
 ///
 /// ```
 /// use pftrack::{BoundingBox, Config, Frame, PixelFormat, TrackState, Tracker};
