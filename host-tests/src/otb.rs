@@ -66,9 +66,11 @@ pub struct Stream {
 
 /// The ground-truth files of a sequence folder: `groundtruth.txt`, or
 /// `groundtruth.1.txt` to `groundtruth.K.txt` with none missing between.
+/// A folder that cannot be listed gives `groundtruth.txt`, so that reading
+/// it names the file that is missing.
 pub fn groundtruth_files(dir: &Path) -> Result<Vec<PathBuf>, String> {
     let single = dir.join("groundtruth.txt");
-    let rd = std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    let Ok(rd) = std::fs::read_dir(dir) else { return Ok(vec![single]) };
     let mut numbers: Vec<u32> = rd
         .filter_map(|e| e.ok()?.file_name().into_string().ok())
         .filter_map(|n| n.strip_prefix("groundtruth.")?.strip_suffix(".txt")?.parse().ok())

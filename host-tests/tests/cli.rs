@@ -181,12 +181,30 @@ fn an_otb_folder_of_several_targets_is_tracked_as_a_group_and_each_alone() {
             assert_eq!(text.lines().count(), if ext == "txt" { 48 } else { 47 }, "{file}");
         }
     }
+    // `score` finds each target's track by the number of its truth.
+    let results = format!("group={}", otb.display());
+    let plots = dir.join("plots");
+    let (ok, stdout, stderr) =
+        track(&["score", "--truth", seq.to_str().unwrap(), "--results", &results, "--plots", plots.to_str().unwrap()]);
+    assert!(ok && stdout.contains("2 sequences: crossing.1, crossing.2"), "{stdout}{stderr}");
     // Each target alone: rows and outputs of the same names, swaps counted.
     let (ok, stdout, stderr) = track(&["otb", seq.to_str().unwrap(), "--alone", "--out-dir", alone.to_str().unwrap()]);
     assert!(ok, "{stderr}");
     assert!(stdout.contains("crossing#1 ") && stdout.contains("crossing#2 "), "{stdout}");
     assert!(stdout.contains("crossing: ") && stdout.contains(" identity swaps, on "), "{stdout}");
     assert_eq!(std::fs::read_to_string(alone.join("crossing.2.txt")).unwrap().lines().count(), 48);
+    // A group is of particle filters; alone, any tracker runs.
+    let out = dir.join("other").to_str().unwrap().to_string();
+    let (ok, _, stderr) = track(&["otb", seq.to_str().unwrap(), "--tracker", "meanshift", "--out-dir", &out]);
+    assert!(!ok && stderr.contains("needs the particle filter"), "{stderr}");
+    let (ok, _, stderr) =
+        track(&["otb", seq.to_str().unwrap(), "--tracker", "meanshift", "--alone", "--out-dir", &out]);
+    assert!(ok, "{stderr}");
+    // A truth one box short is named.
+    let short: String = truths[1].lines().skip(1).map(|l| format!("{l}\n")).collect();
+    std::fs::write(seq.join("groundtruth.2.txt"), short).unwrap();
+    let (ok, _, stderr) = track(&["otb", seq.to_str().unwrap(), "--out-dir", &out]);
+    assert!(!ok && stderr.contains("48 frames in img/ but 47 ground-truth boxes (groundtruth.2.txt)"), "{stderr}");
     // The help says how such a folder is laid out and what --alone does.
     let (ok, help, _) = track(&["otb", "--help"]);
     assert!(ok && help.contains("groundtruth.1.txt") && help.contains("--alone"), "{help}");

@@ -129,7 +129,9 @@ enum Command {
     /// `<sequence>.ms` (median ms/frame). Prints one table and draws the
     /// success and precision plots of all sets.
     Score {
-        /// OTB sequence folders (only groundtruth.txt is read).
+        /// OTB sequence folders (only the ground truth is read; a folder
+        /// of several targets is scored as `<sequence>.1.txt`, … of each
+        /// result folder).
         #[arg(long, required = true, num_args = 1..)]
         truth: Vec<PathBuf>,
         /// Result folders, as NAME=FOLDER or FOLDER (named after the
