@@ -1,5 +1,6 @@
 //! OTB-format sequences: a folder with `img/` (frames sorted by name, JPEG or
-//! PNG) and `groundtruth.txt` (one `x,y,w,h` per line).
+//! PNG) and `groundtruth.txt` (one `x,y,w,h` per line), or for several
+//! targets `groundtruth.1.txt`, `groundtruth.2.txt`, … (one per target).
 
 use crate::source::{FrameSource, ImageFolder, images_in};
 use pftrack::BoundingBox;
@@ -56,33 +57,65 @@ pub fn list_images(dir: &Path) -> Result<Vec<PathBuf>, String> {
 pub struct Stream {
     /// The folder's name.
     pub name: String,
-    /// Ground truth, one box per frame.
-    pub truth: Vec<BoundingBox>,
+    /// Ground truth, one box per frame, for each target: one list from
+    /// `groundtruth.txt`, or one per `groundtruth.N.txt` in the order of N.
+    pub truths: Vec<Vec<BoundingBox>>,
     /// The frames.
     pub frames: ImageFolder,
 }
 
-/// Opens a sequence folder, checking that frames and ground truth agree in
-/// number.
+/// The ground-truth files of a sequence folder: `groundtruth.txt`, or
+/// `groundtruth.1.txt` to `groundtruth.K.txt` with none missing between.
+/// A folder that cannot be listed gives `groundtruth.txt`, so that reading
+/// it names the file that is missing.
+pub fn groundtruth_files(dir: &Path) -> Result<Vec<PathBuf>, String> {
+    let single = dir.join("groundtruth.txt");
+    let Ok(rd) = std::fs::read_dir(dir) else { return Ok(vec![single]) };
+    let mut numbers: Vec<u32> = rd
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter_map(|n| n.strip_prefix("groundtruth.")?.strip_suffix(".txt")?.parse().ok())
+        .collect();
+    numbers.sort_unstable();
+    if numbers.is_empty() {
+        return Ok(vec![single]);
+    }
+    if single.exists() {
+        return Err(format!("{}: both groundtruth.txt and groundtruth.N.txt: one target or several?", dir.display()));
+    }
+    if let Some((k, n)) = numbers.iter().enumerate().find(|&(k, &n)| n as usize != k + 1) {
+        return Err(format!("{}: groundtruth.{n}.txt but no groundtruth.{}.txt", dir.display(), k + 1));
+    }
+    Ok(numbers.iter().map(|n| dir.join(format!("groundtruth.{n}.txt"))).collect())
+}
+
+/// Opens a sequence folder, checking that frames and every target's ground
+/// truth agree in number.
 pub fn open(dir: &Path) -> Result<Stream, String> {
     let name = dir
         .file_name()
         .and_then(|n| n.to_str())
         .ok_or_else(|| format!("{}: not a sequence folder", dir.display()))?
         .to_string();
-    let gt_path = dir.join("groundtruth.txt");
-    let text = std::fs::read_to_string(&gt_path).map_err(|e| format!("{}: {e}", gt_path.display()))?;
-    let truth = parse_groundtruth(&text).map_err(|e| format!("{}: {e}", gt_path.display()))?;
-    let files = list_images(dir)?;
-    if files.len() != truth.len() {
-        return Err(format!(
-            "{}: {} frames in img/ but {} ground-truth boxes",
-            dir.display(),
-            files.len(),
-            truth.len()
-        ));
+    let gt_paths = groundtruth_files(dir)?;
+    let mut truths = Vec::new();
+    for gt_path in &gt_paths {
+        let text = std::fs::read_to_string(gt_path).map_err(|e| format!("{}: {e}", gt_path.display()))?;
+        truths.push(parse_groundtruth(&text).map_err(|e| format!("{}: {e}", gt_path.display()))?);
     }
-    Ok(Stream { name, truth, frames: ImageFolder::new(files) })
+    let files = list_images(dir)?;
+    for (truth, gt_path) in truths.iter().zip(&gt_paths) {
+        if files.len() != truth.len() {
+            let gt = gt_path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+            let boxes = if gt == "groundtruth.txt" { String::new() } else { format!(" ({gt})") };
+            return Err(format!(
+                "{}: {} frames in img/ but {} ground-truth boxes{boxes}",
+                dir.display(),
+                files.len(),
+                truth.len()
+            ));
+        }
+    }
+    Ok(Stream { name, truths, frames: ImageFolder::new(files) })
 }
 
 /// A decoded OTB sequence, frames as packed RGB888.
@@ -101,9 +134,12 @@ pub struct Sequence {
 
 /// Loads and decodes a whole sequence into memory (for studies that run it
 /// many times), checking that frames and ground truth agree. `progress` is
-/// called after each decoded frame.
+/// called after each decoded frame. A folder of several targets is refused:
+/// what loads whole scores one target a sequence.
 pub fn load(dir: &Path, mut progress: impl FnMut(usize, usize)) -> Result<Sequence, String> {
-    let Stream { name, truth, mut frames } = open(dir)?;
+    let Stream { name, truths, mut frames } = open(dir)?;
+    let [truth] = <[_; 1]>::try_from(truths)
+        .map_err(|t| format!("{}: {} targets; only one target a sequence is scored here", dir.display(), t.len()))?;
     let n = frames.frame_count().unwrap_or(0);
     let (width, height) = frames.size();
     let mut decoded = Vec::with_capacity(n);
@@ -205,6 +241,31 @@ mod tests {
         assert!(parse_groundtruth("1,2,3\n").unwrap_err().contains("line 1"));
         assert!(parse_groundtruth("1,2,3,4\n1,2,x,4").unwrap_err().contains("line 2"));
         assert!(parse_groundtruth("").is_err());
+    }
+
+    #[test]
+    fn one_groundtruth_file_or_numbered_ones_without_a_gap() {
+        // Reason: the layouts `open` reads: groundtruth.txt alone (also
+        // when missing, so that reading it names the file), or
+        // groundtruth.1.txt up to .K.txt in number order (10 after 9, not
+        // after 1); both kinds, or a number missing, are refused.
+        let dir = std::env::temp_dir().join(format!("pftrack-otb-gt-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let names = |v: Vec<PathBuf>| -> Vec<String> {
+            v.iter().map(|p| p.file_name().unwrap().to_string_lossy().into_owned()).collect()
+        };
+        assert_eq!(names(groundtruth_files(&dir).unwrap()), ["groundtruth.txt"]);
+        for n in (1..=10).rev() {
+            std::fs::write(dir.join(format!("groundtruth.{n}.txt")), "").unwrap();
+        }
+        let got = names(groundtruth_files(&dir).unwrap());
+        assert_eq!((got.len(), got[8].as_str(), got[9].as_str()), (10, "groundtruth.9.txt", "groundtruth.10.txt"));
+        std::fs::remove_file(dir.join("groundtruth.2.txt")).unwrap();
+        assert!(groundtruth_files(&dir).unwrap_err().contains("no groundtruth.2.txt"));
+        std::fs::write(dir.join("groundtruth.2.txt"), "").unwrap();
+        std::fs::write(dir.join("groundtruth.txt"), "").unwrap();
+        assert!(groundtruth_files(&dir).unwrap_err().contains("both"));
+        std::fs::remove_dir_all(dir).ok();
     }
 
     #[test]

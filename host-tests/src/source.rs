@@ -455,23 +455,33 @@ fn read_header(r: &mut impl Read) -> Result<Header, String> {
     Header::parse(head.get(..got).unwrap_or_default()).map_err(|e| e.to_string())
 }
 
-/// The ground truth of every frame of the fixture at `path`, read by
-/// skipping from record to record over the pixels. Frames where the target
-/// is entirely hidden or gone get an empty box: they are not scored.
+/// The ground truth of every frame of the fixture at `path` (its first
+/// target's, for a fixture of several), read by skipping from record to
+/// record over the pixels. Frames where the target is entirely hidden or
+/// gone get an empty box: they are not scored.
 pub fn fixture_truth(path: &Path) -> Result<Vec<BoundingBox>, String> {
+    Ok(fixture_truths(path)?.into_iter().next().unwrap_or_default())
+}
+
+/// Every target's ground truth in the fixture at `path`, target by target
+/// in the order they are added, as [`fixture_truth`] reads the first's.
+pub fn fixture_truths(path: &Path) -> Result<Vec<Vec<BoundingBox>>, String> {
     use std::io::{Seek, SeekFrom};
     let err = |e: String| format!("{}: {e}", path.display());
     let mut file = BufReader::new(std::fs::File::open(path).map_err(|e| err(e.to_string()))?);
     let header = read_header(&mut file).map_err(err)?;
-    let mut truth = Vec::with_capacity(header.frames as usize);
+    let targets = header.targets.max(1) as usize;
+    let mut truths = vec![Vec::with_capacity(header.frames as usize); targets];
     let mut meta = [0u8; RECORD_META_LEN];
     for i in 0..header.frames {
-        let got = fill(&mut file, &mut meta).map_err(err)?;
-        let m = RecordMeta::parse(meta.get(..got).unwrap_or_default(), i).map_err(|e| err(e.to_string()))?;
-        truth.push(if m.visible_permille == 0 { BoundingBox::default() } else { m.truth });
-        // Over the other targets' truths and the pixels.
-        let skip = header.record_len() - RECORD_META_LEN;
+        for truth in &mut truths {
+            let got = fill(&mut file, &mut meta).map_err(err)?;
+            let m = RecordMeta::parse(meta.get(..got).unwrap_or_default(), i).map_err(|e| err(e.to_string()))?;
+            truth.push(if m.visible_permille == 0 { BoundingBox::default() } else { m.truth });
+        }
+        // Over the pixels.
+        let skip = header.record_len() - targets * RECORD_META_LEN;
         file.seek(SeekFrom::Current(skip as i64)).map_err(|e| err(e.to_string()))?;
     }
-    Ok(truth)
+    Ok(truths)
 }

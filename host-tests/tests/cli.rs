@@ -126,3 +126,87 @@ fn score_ranks_missing_frames_by_each_trackers_confidence() {
     assert!(!ok && stderr.contains("seq.confidence") && stderr.contains("3 confidences for 5 frames"), "{stderr}");
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[test]
+fn an_otb_folder_of_several_targets_is_tracked_as_a_group_and_each_alone() {
+    // Reason: the folder holds the frames of fixtures/groups/crossing.pft
+    // as RGB888 in lossless PNGs and its two truths (as decimal floats that
+    // parse back to the same values), so `otb` on it must track exactly as
+    // `fixture` on the same frames in an RGB888 fixture: the same tracks
+    // byte for byte. The group keeps both identities on that scene
+    // (tests/groups.rs: no swap over 16 seeds), so 0 swaps on 0 of its 48
+    // frames.
+    use host_tests::fixture::Fixture;
+    let dir = std::env::temp_dir().join(format!("pftrack-cli-otb-group-{}", std::process::id()));
+    let seq = dir.join("crossing");
+    let path = format!("{}/../fixtures/groups/crossing.pft", env!("CARGO_MANIFEST_DIR"));
+    let mut fx = Fixture::load(std::path::Path::new(&path)).unwrap();
+    let rgb: Vec<Vec<u8>> = (0..fx.frames.len()).map(|i| host_tests::scene::to_rgb(&fx.frame(i).unwrap())).collect();
+    for (f, px) in fx.frames.iter_mut().zip(rgb) {
+        f.pixels = px;
+    }
+    (fx.format, fx.stride) = (pftrack::PixelFormat::Rgb888, fx.width * 3);
+    std::fs::create_dir_all(seq.join("img")).unwrap();
+    let path = dir.join("crossing.pft");
+    std::fs::write(&path, fx.to_bytes()).unwrap();
+    let path = path.to_str().unwrap();
+    let mut truths = vec![String::new(); 2];
+    for (i, f) in fx.frames.iter().enumerate() {
+        let img = image::RgbImage::from_raw(fx.width as u32, fx.height as u32, f.pixels.clone()).unwrap();
+        img.save(seq.join(format!("img/{:05}.png", i + 1))).unwrap();
+        for (k, m) in f.targets().enumerate() {
+            // OTB's mark of an absent target: a zero size.
+            let t = if m.visible_permille == 0 { pftrack::BoundingBox::default() } else { m.truth };
+            truths[k] += &format!("{},{},{},{}\n", t.x, t.y, t.width, t.height);
+        }
+    }
+    for (k, t) in truths.iter().enumerate() {
+        std::fs::write(seq.join(format!("groundtruth.{}.txt", k + 1)), t).unwrap();
+    }
+    let (otb, direct, alone) = (dir.join("otb"), dir.join("direct"), dir.join("alone"));
+    let (ok, stdout, stderr) = track(&["otb", seq.to_str().unwrap(), "--out-dir", otb.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    for k in 1..=2 {
+        assert!(stdout.lines().any(|l| l.starts_with(&format!("crossing#{k} ")) && l.contains(" 48 ")), "{stdout}");
+    }
+    assert!(stdout.contains("crossing: 0 identity swaps, on 0 of 48 frames (0.0%)"), "{stdout}");
+    let (ok, _, stderr) = track(&["fixture", path, "--out-dir", direct.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    for k in 1..=2 {
+        for ext in ["txt", "confidence"] {
+            let file = format!("crossing.{k}.{ext}");
+            let text = std::fs::read_to_string(otb.join(&file)).unwrap();
+            assert_eq!(text, std::fs::read_to_string(direct.join(&file)).unwrap(), "{file}");
+            // A box for every frame; a confidence for every frame after the first.
+            assert_eq!(text.lines().count(), if ext == "txt" { 48 } else { 47 }, "{file}");
+        }
+    }
+    // `score` finds each target's track by the number of its truth.
+    let results = format!("group={}", otb.display());
+    let plots = dir.join("plots");
+    let (ok, stdout, stderr) =
+        track(&["score", "--truth", seq.to_str().unwrap(), "--results", &results, "--plots", plots.to_str().unwrap()]);
+    assert!(ok && stdout.contains("2 sequences: crossing.1, crossing.2"), "{stdout}{stderr}");
+    // Each target alone: rows and outputs of the same names, swaps counted.
+    let (ok, stdout, stderr) = track(&["otb", seq.to_str().unwrap(), "--alone", "--out-dir", alone.to_str().unwrap()]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("crossing#1 ") && stdout.contains("crossing#2 "), "{stdout}");
+    assert!(stdout.contains("crossing: ") && stdout.contains(" identity swaps, on "), "{stdout}");
+    assert_eq!(std::fs::read_to_string(alone.join("crossing.2.txt")).unwrap().lines().count(), 48);
+    // A group is of particle filters; alone, any tracker runs.
+    let out = dir.join("other").to_str().unwrap().to_string();
+    let (ok, _, stderr) = track(&["otb", seq.to_str().unwrap(), "--tracker", "meanshift", "--out-dir", &out]);
+    assert!(!ok && stderr.contains("needs the particle filter"), "{stderr}");
+    let (ok, _, stderr) =
+        track(&["otb", seq.to_str().unwrap(), "--tracker", "meanshift", "--alone", "--out-dir", &out]);
+    assert!(ok, "{stderr}");
+    // A truth one box short is named.
+    let short: String = truths[1].lines().skip(1).map(|l| format!("{l}\n")).collect();
+    std::fs::write(seq.join("groundtruth.2.txt"), short).unwrap();
+    let (ok, _, stderr) = track(&["otb", seq.to_str().unwrap(), "--out-dir", &out]);
+    assert!(!ok && stderr.contains("48 frames in img/ but 47 ground-truth boxes (groundtruth.2.txt)"), "{stderr}");
+    // The help says how such a folder is laid out and what --alone does.
+    let (ok, help, _) = track(&["otb", "--help"]);
+    assert!(ok && help.contains("groundtruth.1.txt") && help.contains("--alone"), "{help}");
+    std::fs::remove_dir_all(dir).ok();
+}

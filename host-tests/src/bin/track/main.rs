@@ -92,18 +92,35 @@ enum Command {
         raw: Option<RawSpec>,
     },
     /// OTB sequence folders (img/ + groundtruth.txt); fixture files (.pft) are accepted too.
+    ///
+    /// A folder with groundtruth.1.txt, groundtruth.2.txt, … instead (one
+    /// x,y,w,h line per frame each, zero or NaN sizes where a target is
+    /// absent), like a fixture of several targets, is tracked as one group
+    /// of all its targets, each added from its first box in file order:
+    /// one row per target (SEQ#1, SEQ#2, …), its outputs in SEQ.1.txt,
+    /// SEQ.1.ms, SEQ.1.confidence, …, and each sequence's identity swaps
+    /// (tracks claimed on another target's truth and not their own) below
+    /// the table. A group's ms/frame is the whole group's.
     Otb {
         /// Sequence folders or .pft fixture files.
         #[arg(required = true)]
         seqs: Vec<PathBuf>,
+        /// Track each target of a sequence of several alone, not as a group:
+        /// target N by its own tracker with seed + N - 1, as the group seeds
+        /// it, so that the two runs differ only by the group.
+        #[arg(long)]
+        alone: bool,
         #[command(flatten)]
         common: Common,
     },
-    /// The project's fixture files (.pft).
+    /// The project's fixture files (.pft); those of several targets as `otb` tracks them.
     Fixture {
         /// Fixture files.
         #[arg(required = true)]
         files: Vec<PathBuf>,
+        /// As for `otb`.
+        #[arg(long)]
+        alone: bool,
         #[command(flatten)]
         common: Common,
     },
@@ -112,7 +129,9 @@ enum Command {
     /// `<sequence>.ms` (median ms/frame). Prints one table and draws the
     /// success and precision plots of all sets.
     Score {
-        /// OTB sequence folders (only groundtruth.txt is read).
+        /// OTB sequence folders (only the ground truth is read; a folder
+        /// of several targets is scored as `<sequence>.1.txt`, … of each
+        /// result folder).
         #[arg(long, required = true, num_args = 1..)]
         truth: Vec<PathBuf>,
         /// Result folders, as NAME=FOLDER or FOLDER (named after the
@@ -177,6 +196,7 @@ fn report(result: Result<(), String>) -> ExitCode {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    let mut alone = false;
     let (paths, mut common, ablation) = match cli.command {
         Command::Convert { input, output, raw } => return report(convert::command(&input, &output, raw)),
         Command::Run(args) => return report(run::command(&args)),
@@ -191,8 +211,14 @@ fn main() -> ExitCode {
             starts::command();
             return ExitCode::SUCCESS;
         }
-        Command::Otb { seqs, common } => (seqs, common, None),
-        Command::Fixture { files, common } => (files, common, None),
+        Command::Otb { seqs, alone: a, common } => {
+            alone = a;
+            (seqs, common, None)
+        }
+        Command::Fixture { files, alone: a, common } => {
+            alone = a;
+            (files, common, None)
+        }
         Command::Ablate { seqs, seeds, only, split, per_sequence, sre, common } => {
             (seqs, common, Some((seeds, only, split, per_sequence, sre)))
         }
@@ -215,5 +241,5 @@ fn main() -> ExitCode {
         let opts = AblateOpts { seeds, only: only.as_deref(), split, per_sequence, sre };
         return report(ablate::command(&paths, &opts, &common));
     }
-    evaluate::command(&paths, &common)
+    evaluate::command(&paths, &common, alone)
 }

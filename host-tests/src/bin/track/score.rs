@@ -105,13 +105,20 @@ pub(crate) fn command(
     plots: &Path,
     split: Option<&Split>,
 ) -> Result<(), String> {
-    let truths: Vec<(String, Vec<BoundingBox>)> = truth
-        .iter()
-        .map(|dir| {
-            let name = dir.file_name().and_then(|n| n.to_str()).unwrap_or("").to_string();
-            read_boxes(&dir.join("groundtruth.txt")).map(|t| (name, t))
-        })
-        .collect::<Result<_, _>>()?;
+    // Each target's truth with the name of its result files: the folder's
+    // name, or `<name>.<N>` for its groundtruth.N.txt, as `track otb`
+    // writes them; split lists name folders.
+    let mut truths: Vec<(String, Vec<BoundingBox>)> = Vec::new();
+    let mut folder_of = Vec::new();
+    for dir in truth {
+        let name = dir.file_name().and_then(|n| n.to_str()).unwrap_or("").to_string();
+        let files = otb::groundtruth_files(dir)?;
+        let several = files.len() > 1;
+        for (k, f) in files.iter().enumerate() {
+            truths.push((if several { format!("{name}.{}", k + 1) } else { name.clone() }, read_boxes(f)?));
+            folder_of.push(name.clone());
+        }
+    }
     // Per set: its curves, and each sequence's AUC averaged over the set's runs.
     let mut sets = Vec::new();
     for spec in results {
@@ -172,7 +179,7 @@ pub(crate) fn command(
     println!();
     let mean_of = |per_seq: &[f64], names: &[String]| {
         let v: Vec<f64> =
-            seqs.iter().zip(per_seq).filter(|(n, _)| names.iter().any(|m| m == *n)).map(|(_, &a)| a).collect();
+            folder_of.iter().zip(per_seq).filter(|(n, _)| names.iter().any(|m| m == *n)).map(|(_, &a)| a).collect();
         fmt3((!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64))
     };
     match split {
