@@ -24,8 +24,9 @@ class Estimate:
 class Tracker:
     """A colour particle-filter tracker with OpenCV's interface.
 
-    ``particles`` must be 100 in this build; ``seed`` makes runs repeatable;
-    ``rgb`` reads HxWx3 arrays as RGB instead of OpenCV's BGR. Settings:
+    ``particles`` is 25, 50, 100, 200 or 400 (fewer run faster; any other
+    count raises ``ValueError``); ``seed`` makes runs repeatable; ``rgb``
+    reads HxWx3 arrays as RGB instead of OpenCV's BGR. Settings:
     ``lost_below``, ``found_above``, ``alpha`` (floats), ``lost_after``
     (int), ``correlation``, ``scene_motion``, ``redetect`` (bools). Bad
     settings raise ``ValueError`` (out of range) or ``TypeError`` (unknown).
@@ -52,6 +53,9 @@ class Tracker:
         """
     def update(self, frame: FrameLike, raw: Optional[Raw] = None) -> Tuple[bool, Box]:
         """Tracks one frame: ``(ok, box)``, ``ok`` while tracking. Releases the GIL while it runs."""
+    @property
+    def particles(self) -> int:
+        """The number of particles."""
     @property
     def estimate(self) -> Optional[Estimate]:
         """The last estimate (``None`` before ``init``)."""

@@ -7,8 +7,62 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 
-/// The tracker's particles: the one size this module builds.
-const PARTICLES: usize = 100;
+/// The particle counts a `Tracker` can have. The core fixes N at compile
+/// time, so each count is a `Tracker<N>` compiled into the module, another
+/// copy of the tracker's code in the wheel: a few, doubling from a quarter
+/// to four times the papers' 100, cover trading speed for accuracy. Each
+/// method is written once here and expanded for every count.
+macro_rules! particle_counts {
+    ($($n:literal => $variant:ident),+ $(,)?) => {
+        /// The counts built, smallest first.
+        const PARTICLES: &[usize] = &[$($n),+];
+
+        /// A tracker of one of the counts built. Boxed, so that a small
+        /// tracker does not take the room of the largest.
+        enum AnyTracker {
+            $($variant(Box<Tracker<$n>>)),+
+        }
+
+        impl AnyTracker {
+            /// A tracker of `particles`, or None for a count not built.
+            fn new(particles: usize, config: Config, seed: u64) -> Option<Result<Self, Error>> {
+                match particles {
+                    $($n => Some(Tracker::<$n>::new(config, seed).map(|t| AnyTracker::$variant(Box::new(t)))),)+
+                    _ => None,
+                }
+            }
+
+            fn particles(&self) -> usize {
+                match self {
+                    $(AnyTracker::$variant(_) => $n),+
+                }
+            }
+
+            fn init(&mut self, frame: &Frame<'_>, bbox: BoundingBox) -> Result<pftrack::Estimate, Error> {
+                match self {
+                    $(AnyTracker::$variant(t) => t.init(frame, bbox)),+
+                }
+            }
+
+            fn step(&mut self, frame: &Frame<'_>) -> Result<pftrack::Estimate, Error> {
+                match self {
+                    $(AnyTracker::$variant(t) => t.step(frame)),+
+                }
+            }
+        }
+    };
+}
+
+particle_counts!(25 => P25, 50 => P50, 100 => P100, 200 => P200, 400 => P400);
+
+/// The counts built, for messages: "25, 50, 100, 200 or 400".
+fn counts_named() -> String {
+    let names: Vec<String> = PARTICLES.iter().map(usize::to_string).collect();
+    match names.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+        _ => names.concat(),
+    }
+}
 
 fn value_error(e: Error) -> PyErr {
     PyValueError::new_err(e.to_string())
@@ -193,10 +247,11 @@ fn config_of(settings: Option<&Bound<'_, PyDict>>) -> PyResult<Config> {
 
 /// A colour particle-filter tracker with OpenCV's interface:
 /// `Tracker(particles=100, seed=1, rgb=False, **settings)`, then
-/// `init(frame, (x, y, w, h))` and `ok, box = update(frame)`.
+/// `init(frame, (x, y, w, h))` and `ok, box = update(frame)`. `particles`
+/// is 25, 50, 100, 200 or 400.
 #[pyclass(name = "Tracker", module = "pftrack")]
 struct PyTracker {
-    inner: Box<Tracker<PARTICLES>>,
+    inner: AnyTracker,
     rgb: bool,
     last: Option<Estimate>,
 }
@@ -205,12 +260,21 @@ struct PyTracker {
 impl PyTracker {
     #[new]
     #[pyo3(signature = (particles = 100, seed = 1, rgb = false, **settings))]
-    fn new(particles: usize, seed: u64, rgb: bool, settings: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
-        if particles != PARTICLES {
-            return Err(PyValueError::new_err(format!("this build has trackers of {PARTICLES} particles")));
-        }
-        let inner = Tracker::<PARTICLES>::new(config_of(settings)?, seed).map_err(value_error)?;
-        Ok(PyTracker { inner: Box::new(inner), rgb, last: None })
+    fn new(particles: i64, seed: u64, rgb: bool, settings: Option<&Bound<'_, PyDict>>) -> PyResult<Self> {
+        // Signed, so that a negative count is the same ValueError as any
+        // other count not built rather than an OverflowError.
+        let bad = || {
+            PyValueError::new_err(format!("particles must be {} (the counts built), not {particles}", counts_named()))
+        };
+        let count = usize::try_from(particles).map_err(|_| bad())?;
+        let inner = AnyTracker::new(count, config_of(settings)?, seed).ok_or_else(bad)?.map_err(value_error)?;
+        Ok(PyTracker { inner, rgb, last: None })
+    }
+
+    /// The number of particles.
+    #[getter]
+    fn particles(&self) -> usize {
+        self.inner.particles()
     }
 
     /// Learns the target in `box` of `frame` and tracks it from there (call
