@@ -62,6 +62,7 @@
 //!
 #![cfg_attr(not(test), no_std)]
 
+pub(crate) mod apart;
 pub mod bins;
 pub mod boundary;
 pub mod colour;

@@ -1,25 +1,26 @@
 //! A fixture of several targets: a group of them all, each added from its
 //! first box, one trace line per target and frame (`FRAME TARGET TRACE`, as
 //! `pftrack-trace` prints it), and the group's instruction counts, stack and
-//! RAM. Built for the emulated board only: the two real boards' RAM goes
-//! to their frame buffers, with no room for a second tracker's worth.
+//! RAM. Built with the `group` feature only: a build without it refuses
+//! such a fixture, so that the default build and its audited figures are
+//! one tracker's.
 
 use crate::host::FixtureStream;
 use core::fmt::Write;
-#[cfg(not(any(feature = "stm32f405", feature = "rp2040")))]
+#[cfg(feature = "group")]
 use pftrack::{BoundingBox, Config, Frame, Group};
 
 /// The most targets the group holds.
-#[cfg(not(any(feature = "stm32f405", feature = "rp2040")))]
+#[cfg(feature = "group")]
 const TARGETS: usize = 3;
 
 /// The group lives in a static: it is the largest object.
-#[cfg(not(any(feature = "stm32f405", feature = "rp2040")))]
+#[cfg(feature = "group")]
 type FwGroup = Group<TARGETS, 100>;
 
 /// Tracks the fixture of `stream` with a group; returns whether it ran to
 /// the end.
-#[cfg(not(any(feature = "stm32f405", feature = "rp2040")))]
+#[cfg(feature = "group")]
 pub fn run(
     out: &mut impl Write,
     stream: &mut FixtureStream,
@@ -102,8 +103,8 @@ pub fn run(
     true
 }
 
-/// The boards without room for a group refuse a fixture of several targets.
-#[cfg(any(feature = "stm32f405", feature = "rp2040"))]
+/// A build without the `group` feature refuses a fixture of several targets.
+#[cfg(not(feature = "group"))]
 pub fn run(
     out: &mut impl Write,
     stream: &mut FixtureStream,
@@ -112,7 +113,7 @@ pub fn run(
 ) -> bool {
     let _ = writeln!(
         out,
-        "error: {path} has {} targets; this build ({}) tracks one",
+        "error: {path} has {} targets; this build ({}) tracks one (the `group` feature tracks several)",
         stream.header.targets,
         crate::board::NAME
     );
@@ -120,20 +121,20 @@ pub fn run(
 }
 
 /// Builds the group into a static (out of line, as `make_tracker`).
-#[cfg(not(any(feature = "stm32f405", feature = "rp2040")))]
+#[cfg(feature = "group")]
 #[inline(never)]
 fn make_group(seed: u64) -> Result<Option<&'static mut FwGroup>, pftrack::Error> {
     let g = FwGroup::new(Config::default(), seed)?;
     Ok(cortex_m::singleton!(: FwGroup = g))
 }
 
-#[cfg(not(any(feature = "stm32f405", feature = "rp2040")))]
+#[cfg(feature = "group")]
 #[inline(never)]
 fn add(g: &mut FwGroup, frame: &Frame<'_>, b: BoundingBox) -> Result<pftrack::Estimate, pftrack::Error> {
     g.add(frame, b).map(|a| a.estimate)
 }
 
-#[cfg(not(any(feature = "stm32f405", feature = "rp2040")))]
+#[cfg(feature = "group")]
 #[inline(never)]
 fn step(g: &mut FwGroup, frame: &Frame<'_>) -> Result<pftrack::Tracks<TARGETS>, pftrack::Error> {
     g.step(frame)

@@ -1,6 +1,7 @@
 //! Several targets at once: a fixed-capacity group of trackers that share
 //! one working memory and keep apart.
 
+use crate::apart::Others;
 use crate::config::Config;
 use crate::error::Error;
 use crate::estimate::{Estimate, TrackState};
@@ -40,34 +41,6 @@ pub struct Added {
     /// The target already tracked whose box overlaps the new one most, and
     /// their intersection over union; `None` when no tracked box overlaps.
     pub overlap: Option<(TargetId, Real)>,
-}
-
-/// How much of a hypothesis's weight another target's region takes away:
-/// a hypothesis whose box lies wholly inside a box another target holds,
-/// and outside its own target's, keeps `1 - APART` of its similarity. Less
-/// than 1, so that a target passing behind another is not pushed off its
-/// own place while they overlap; enough that two same-coloured targets do
-/// not settle on one (the crossing test in this module's tests).
-pub(crate) const APART: Real = 0.5;
-
-/// The factor a hypothesis `e`'s similarity keeps beside the regions
-/// `held` by other targets, when its own target is expected at `own`:
-/// `1 - APART ·` how much more of its core one of their cores covers than
-/// `own`'s does. Where the targets' regions overlap, a hypothesis is
-/// discounted only on the side nearer another's: two targets that meet
-/// split the overlap between them instead of pushing each other back.
-pub(crate) fn apart(e: &Ellipse, own: Option<&Ellipse>, held: &[Ellipse]) -> Real {
-    let mine = core(e);
-    let base = own.map_or(0.0, |o| mine.covered_by(&core(o)));
-    let covered = held.iter().fold(0.0 as Real, |c, h| c.max(mine.covered_by(&core(h))));
-    1.0 - APART * (covered - base).max(0.0)
-}
-
-/// The box inscribed in an ellipse: its core, which two targets whose
-/// outlines merely touch do not share.
-fn core(e: &Ellipse) -> BoundingBox {
-    let k = core::f32::consts::FRAC_1_SQRT_2;
-    Ellipse { hx: k * e.hx, hy: k * e.hy, ..*e }.to_box()
 }
 
 /// One member: a target's identity and state.
@@ -294,7 +267,8 @@ where
             }
             let before = m.track.held();
             let own = held.iter().flatten().find(|(id, _)| *id == me).map(|(_, e)| *e);
-            let estimate = m.track.step_inner(scratch, frame, None, (own, others.get(..n).unwrap_or(&[])))?;
+            let apart = Others { own, held: others.get(..n).unwrap_or(&[]) };
+            let estimate = m.track.step_inner(scratch, frame, None, apart)?;
             m.velocity = match (before, m.track.held()) {
                 (Some(b), Some(a)) => {
                     let (vx, vy) = m.velocity;

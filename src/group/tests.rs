@@ -51,27 +51,6 @@ fn square(c: (f32, f32), s: usize) -> BoundingBox {
 }
 
 #[test]
-fn apart_keeps_the_uncovered_share() {
-    // Reason: hand computation. The core of the ellipse in a 10x10 box at
-    // (0, 0) is the box inscribed in it, 10/√2 = 7.07 px a side from 1.46
-    // to 8.54; a neighbour 5 px to the right has its core from 6.46 to
-    // 13.54, covering 2.07 / 7.07 = 0.293 of it, so it keeps
-    // 1 - APART · 0.293. A core inside a larger one is wholly covered; a
-    // distant one, or one as much covered by its own target's, is
-    // untouched.
-    let e = Ellipse::from_box(&BoundingBox::new(0.0, 0.0, 10.0, 10.0));
-    let half = Ellipse::from_box(&BoundingBox::new(5.0, 0.0, 10.0, 10.0));
-    let over = Ellipse::from_box(&BoundingBox::new(-5.0, -5.0, 30.0, 30.0));
-    let far = Ellipse::from_box(&BoundingBox::new(50.0, 50.0, 10.0, 10.0));
-    let share = (10.0 / 2f32.sqrt() - 5.0) / (10.0 / 2f32.sqrt());
-    assert!((apart(&e, None, &[half]) - (1.0 - APART * share)).abs() < 1e-5);
-    assert_eq!(apart(&e, None, &[far, over]), 1.0 - APART);
-    assert_eq!(apart(&e, None, &[]), 1.0);
-    assert_eq!(apart(&e, Some(&e), &[half]), 1.0);
-    assert!((apart(&e, Some(&half), &[over]) - (1.0 - APART * (1.0 - share))).abs() < 1e-5);
-}
-
-#[test]
 fn a_group_of_one_is_a_tracker_with_the_same_seed() {
     // Reason: cross-check of two paths. With no other target there is
     // nothing to keep apart from, and target 0 draws from the group's seed,

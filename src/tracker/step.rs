@@ -4,6 +4,7 @@ use super::confidence::{SPEED_RATE, TYPICAL_CONTRAST, on_target};
 use super::scratch::*;
 use super::search::*;
 use super::{ScalePrior, Track, Tracker};
+use crate::apart::{Alone, Apart};
 use crate::config::{Life, ModelUpdate};
 use crate::error::Error;
 use crate::estimate::{Diagnostics, Estimate, Event, TrackState};
@@ -22,7 +23,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     /// The frame must have the size the tracker was initialised with; any
     /// pixel format may be used.
     pub fn step(&mut self, frame: &Frame<'_>) -> Result<Estimate, Error> {
-        self.track.step_inner(&mut self.scratch, frame, None, (None, &[]))
+        self.track.step_inner(&mut self.scratch, frame, None, Alone)
     }
 
     /// [`Tracker::step`] with an external size measurement for this frame
@@ -31,7 +32,7 @@ impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tra
     /// the tracker is left as it was.
     pub fn step_with_prior(&mut self, frame: &Frame<'_>, prior: ScalePrior) -> Result<Estimate, Error> {
         prior.validate()?;
-        self.track.step_inner(&mut self.scratch, frame, Some(prior), (None, &[]))
+        self.track.step_inner(&mut self.scratch, frame, Some(prior), Alone)
     }
 }
 
@@ -39,12 +40,12 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
     /// One step, as its phases: predict where the target may be, observe
     /// each hypothesis, weigh them, estimate (and size) the target, decide
     /// its state, and adapt the models.
-    pub(crate) fn step_inner<const E: usize>(
+    pub(crate) fn step_inner<const E: usize, A: Apart>(
         &mut self,
         scratch: &mut Scratch<K, E>,
         frame: &Frame<'_>,
         prior: Option<ScalePrior>,
-        held: (Option<Ellipse>, &[Ellipse]),
+        apart: A,
     ) -> Result<Estimate, Error> {
         let target = self.target.as_ref().ok_or(Error::NotInitialised)?;
         let size = (frame.width(), frame.height());
@@ -52,7 +53,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
             return Err(Error::FrameSizeChanged { expected: target.frame, got: size });
         }
         self.predict(scratch, frame, prior);
-        let observed = self.observe(scratch, frame, held);
+        let observed = self.observe(scratch, frame, apart);
         let sigma = self.weigh(observed.d2_max);
         // An external size measurement, or the table's fixed size, decides
         // the size: no search then.
@@ -127,11 +128,11 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
     }
 
     /// Each particle's similarity with the models, left in `weights`.
-    pub(super) fn observe<const E: usize>(
+    pub(super) fn observe<const E: usize, A: Apart>(
         &mut self,
         scratch: &mut Scratch<K, E>,
         frame: &Frame<'_>,
-        held: (Option<Ellipse>, &[Ellipse]),
+        apart: A,
     ) -> Observed {
         let size = (frame.width(), frame.height());
         let table = if T > 0 { self.config.table } else { None };
@@ -185,9 +186,9 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
                 *w = (1.0 - b.weight) * *w + b.weight * (g as Real / out.g_best as Real);
             }
         }
-        if let (own, others @ [_, ..]) = held {
+        if A::ANY {
             for (w, p) in weights.iter_mut().zip(particles.iter()) {
-                *w *= crate::group::apart(&p.ellipse(), own.as_ref(), others);
+                *w *= apart.factor(&p.ellipse());
             }
         }
         out
