@@ -218,10 +218,22 @@ where
 
     /// Re-initialises target `id` on `bbox` in `frame`, keeping its
     /// identity (as [`crate::Tracker::init`] does for one target).
+    /// A frame of another size than the other targets' is
+    /// [`Error::FrameSizeChanged`].
     pub fn reinit(&mut self, id: TargetId, frame: &Frame<'_>, bbox: BoundingBox) -> Result<Estimate, Error> {
+        self.member(id)?;
+        let size = (frame.width(), frame.height());
+        if let Some(expected) = self.active().filter(|m| m.id != Some(id)).find_map(|m| m.track.frame_size())
+            && expected != size
+        {
+            return Err(Error::FrameSizeChanged { expected, got: size });
+        }
         let Group { members, scratch, .. } = self;
         let member = members.iter_mut().find(|m| m.id == Some(id)).ok_or(Error::UnknownTarget { id: id.0 })?;
-        member.track.init(scratch, frame, bbox)
+        let estimate = member.track.init(scratch, frame, bbox)?;
+        // A new box: the old motion says nothing of where it goes next.
+        member.velocity = (0.0, 0.0);
+        Ok(estimate)
     }
 
     /// Stops following target `id`; its place is free for another.

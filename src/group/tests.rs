@@ -76,8 +76,8 @@ fn a_group_of_one_is_a_tracker_with_the_same_seed() {
 #[test]
 fn bad_calls_are_errors_and_leave_the_group_as_it_was() {
     // Reason: the contract. A full group, an unknown or removed identity
-    // and a frame of another size are typed errors; identities are not
-    // reused after a removal.
+    // and a frame of another size (to add, step or re-initialise with) are
+    // typed errors; identities are not reused after a removal.
     let px = scene(&[(40.0, 40.0), (110.0, 50.0)], 16, 0);
     let f = frame(&px);
     let mut g: Group<2, 30> = Group::new(Config::default(), 1).unwrap();
@@ -102,6 +102,10 @@ fn bad_calls_are_errors_and_leave_the_group_as_it_was() {
     let other = Frame::packed(&small, 32, 24, PixelFormat::Rgb888).unwrap();
     assert_eq!(g.step(&other).err(), Some(Error::FrameSizeChanged { expected: (W, H), got: (32, 24) }));
     assert_eq!(g.ids().collect::<Vec<_>>(), [c.id, b.id]);
+    assert!(matches!(
+        g.reinit(c.id, &other, BoundingBox::new(0.0, 0.0, 8.0, 8.0)),
+        Err(Error::FrameSizeChanged { .. })
+    ));
     g.remove(c.id).unwrap();
     assert!(matches!(g.add(&other, BoundingBox::new(0.0, 0.0, 8.0, 8.0)), Err(Error::FrameSizeChanged { .. })));
     assert_eq!(g.ids().collect::<Vec<_>>(), [b.id]);
