@@ -115,31 +115,26 @@ class HueShift:
         return self.box
 
 
-class Nano:
-    """NanoTrack (OpenCV's TrackerNano) with its two ONNX files from `models`."""
+class Nano(Legacy):
+    """NanoTrack (OpenCV's TrackerNano) with its two ONNX files from `models`,
+    driven as the legacy trackers are, keeping its score after each update."""
 
     FILES = ("nanotrack_backbone_sim.onnx", "nanotrack_head_sim.onnx")
 
     def __init__(self, models):
-        self.params = cv2.TrackerNano_Params()
-        self.params.backbone, self.params.neckhead = (str(models / f) for f in self.FILES)
+        params = cv2.TrackerNano_Params()
+        params.backbone, params.neckhead = (str(models / f) for f in self.FILES)
+        self.make = lambda: cv2.TrackerNano.create(params)
 
     def init(self, img, box):
-        self.failures = 0
+        super().init(img, box)
         self.scores = []
-        self.t = cv2.TrackerNano.create(self.params)
-        self.t.init(img, tuple(int(round(v)) for v in box))
-        self.box = box
 
     def update(self, img):
-        ok, box = self.t.update(img)
-        if ok:
-            self.box = tuple(float(v) for v in box)
-        else:
-            self.failures += 1
+        box = super().update(img)
         # Read after the update: the score of the box it just chose.
         self.scores.append(float(self.t.getTrackingScore()))
-        return self.box
+        return box
 
 
 TRACKERS = {
