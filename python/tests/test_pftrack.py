@@ -30,21 +30,8 @@ def f32(v):
     return struct.unpack("<f", struct.pack("<f", v))[0]
 
 
-def read_truth(path):
-    """The fixture's ground truth: each frame's box and visible fraction per mille."""
-    data = path.read_bytes()
-    code, _, height, stride, count = struct.unpack_from("<HHHII", data, 10)
-    frame_bytes = stride * height
-    if code == 5:
-        frame_bytes += 2 * (stride // 2) * (height // 2)
-    if code == 6:
-        frame_bytes += stride * (height // 2)
-    at = [32 + i * (20 + frame_bytes) for i in range(count)]
-    return [(struct.unpack_from("<4f", data, a), struct.unpack_from("<H", data, a + 16)[0]) for a in at]
-
-
-def read_fixture(path):
-    """The fixture's format name, size, stride, first box and frames (docs/fixtures.md)."""
+def records(path):
+    """The fixture's header fields and where each frame record starts (docs/fixtures.md)."""
     data = path.read_bytes()
     code, width, height, stride, count = struct.unpack_from("<HHHII", data, 10)
     frame_bytes = stride * height
@@ -52,8 +39,21 @@ def read_fixture(path):
         frame_bytes += 2 * (stride // 2) * (height // 2)
     if code == 6:
         frame_bytes += stride * (height // 2)
+    at = [32 + i * (20 + frame_bytes) for i in range(count)]
+    return data, (code, width, height, stride), at, frame_bytes
+
+
+def read_truth(path):
+    """The fixture's ground truth: each frame's box and visible fraction per mille."""
+    data, _, at, _ = records(path)
+    return [(struct.unpack_from("<4f", data, a), struct.unpack_from("<H", data, a + 16)[0]) for a in at]
+
+
+def read_fixture(path):
+    """The fixture's format name, size, stride, first box and frames."""
+    data, (code, width, height, stride), at, frame_bytes = records(path)
     box = struct.unpack_from("<4f", data, 32)
-    frames = [data[32 + i * (20 + frame_bytes) + 20 : 32 + (i + 1) * (20 + frame_bytes)] for i in range(count)]
+    frames = [data[a + 20 : a + 20 + frame_bytes] for a in at]
     return FORMATS[code], width, height, stride, box, frames
 
 
