@@ -26,13 +26,14 @@ impl Apart for Alone {
 }
 
 /// A group's member: where its own target is expected, and the regions the
-/// other tracked targets hold.
+/// other tracked targets hold, as their [`core`]s (made once a frame, not
+/// once a hypothesis).
 #[derive(Copy, Clone, Debug)]
 pub(crate) struct Others<'a> {
     /// Where the member's own target is expected (none while it is lost).
-    pub(crate) own: Option<Ellipse>,
+    pub(crate) own: Option<BoundingBox>,
     /// The regions the other tracked targets hold.
-    pub(crate) held: &'a [Ellipse],
+    pub(crate) held: &'a [BoundingBox],
 }
 
 impl Apart for Others<'_> {
@@ -50,22 +51,22 @@ impl Apart for Others<'_> {
 /// not settle on one (the crossing test in this module's tests).
 pub(crate) const APART: Real = 0.5;
 
-/// The factor a hypothesis `e`'s similarity keeps beside the regions
-/// `held` by other targets, when its own target is expected at `own`:
+/// The factor a hypothesis `e`'s similarity keeps beside the cores `held`
+/// of other targets' regions, when its own target's is `own`:
 /// `1 - APART ·` how much more of its core one of their cores covers than
 /// `own`'s does. Where the targets' regions overlap, a hypothesis is
 /// discounted only on the side nearer another's: two targets that meet
 /// split the overlap between them instead of pushing each other back.
-fn apart(e: &Ellipse, own: Option<&Ellipse>, held: &[Ellipse]) -> Real {
+fn apart(e: &Ellipse, own: Option<&BoundingBox>, held: &[BoundingBox]) -> Real {
     let mine = core(e);
-    let base = own.map_or(0.0, |o| mine.covered_by(&core(o)));
-    let covered = held.iter().fold(0.0 as Real, |c, h| c.max(mine.covered_by(&core(h))));
+    let base = own.map_or(0.0, |o| mine.covered_by(o));
+    let covered = held.iter().fold(0.0 as Real, |c, h| c.max(mine.covered_by(h)));
     1.0 - APART * (covered - base).max(0.0)
 }
 
 /// The box inscribed in an ellipse: its core, which two targets whose
 /// outlines merely touch do not share.
-fn core(e: &Ellipse) -> BoundingBox {
+pub(crate) fn core(e: &Ellipse) -> BoundingBox {
     let k = core::f32::consts::FRAC_1_SQRT_2;
     Ellipse { hx: k * e.hx, hy: k * e.hy, ..*e }.to_box()
 }
@@ -83,15 +84,15 @@ mod tests {
         // 1 - APART · 0.293. A core inside a larger one is wholly covered; a
         // distant one, or one as much covered by its own target's, is
         // untouched.
+        let cored = |x, y, w, h| core(&Ellipse::from_box(&BoundingBox::new(x, y, w, h)));
         let e = Ellipse::from_box(&BoundingBox::new(0.0, 0.0, 10.0, 10.0));
-        let half = Ellipse::from_box(&BoundingBox::new(5.0, 0.0, 10.0, 10.0));
-        let over = Ellipse::from_box(&BoundingBox::new(-5.0, -5.0, 30.0, 30.0));
-        let far = Ellipse::from_box(&BoundingBox::new(50.0, 50.0, 10.0, 10.0));
+        let (mine, half) = (core(&e), cored(5.0, 0.0, 10.0, 10.0));
+        let (over, far) = (cored(-5.0, -5.0, 30.0, 30.0), cored(50.0, 50.0, 10.0, 10.0));
         let share = (10.0 / 2f32.sqrt() - 5.0) / (10.0 / 2f32.sqrt());
         assert!((apart(&e, None, &[half]) - (1.0 - APART * share)).abs() < 1e-5);
         assert_eq!(apart(&e, None, &[far, over]), 1.0 - APART);
         assert_eq!(apart(&e, None, &[]), 1.0);
-        assert_eq!(apart(&e, Some(&e), &[half]), 1.0);
+        assert_eq!(apart(&e, Some(&mine), &[half]), 1.0);
         assert!((apart(&e, Some(&half), &[over]) - (1.0 - APART * (1.0 - share))).abs() < 1e-5);
     }
 }

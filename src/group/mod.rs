@@ -1,7 +1,7 @@
 //! Several targets at once: a fixed-capacity group of trackers that share
 //! one working memory and keep apart.
 
-use crate::apart::Others;
+use crate::apart::{Others, core};
 use crate::config::Config;
 use crate::error::Error;
 use crate::estimate::{Estimate, TrackState};
@@ -257,17 +257,17 @@ where
         {
             return Err(Error::FrameSizeChanged { expected, got: size });
         }
-        // The regions held, as the last frame left them: every target's
+        // The regions held (their cores), as the last frame left them: every target's
         // step sees the same ones whatever the order.
-        let mut held: [Option<(TargetId, Ellipse)>; M] = [None; M];
+        let mut held: [Option<(TargetId, BoundingBox)>; M] = [None; M];
         for (h, m) in held.iter_mut().zip(self.members.iter()) {
-            *h = m.id.zip(m.held());
+            *h = m.id.zip(m.held().map(|e| core(&e)));
         }
         let mut out = Tracks::new();
         let Group { members, scratch, .. } = self;
         for m in members.iter_mut() {
             let Some(me) = m.id else { continue };
-            let mut others = [Ellipse::default(); M];
+            let mut others = [BoundingBox::default(); M];
             let mut n = 0;
             for (id, e) in held.iter().flatten() {
                 if *id != me
