@@ -102,7 +102,7 @@ pub(crate) fn command(a: &RunArgs) -> Result<(), String> {
     if boxes.len() > host_tests::runner::GROUP_TARGETS {
         return Err(format!("at most {} --box at once", host_tests::runner::GROUP_TARGETS));
     }
-    let init = boxes[0];
+    let Some(&init) = boxes.first() else { return Err("give the target's box: --box X,Y,W,H".into()) };
     let stdout_video = a.annotate.as_deref() == Some("-");
     if stdout_video && a.json.is_none() && a.csv.is_none() {
         return Err("--annotate - writes video to standard output: give --json FILE or --csv FILE for the track".into());
