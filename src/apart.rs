@@ -12,6 +12,10 @@ pub(crate) trait Apart: Copy {
     const ANY: bool;
     /// The factor, in `[1 - APART, 1]`, that hypothesis `e`'s similarity keeps.
     fn factor(&self, e: &Ellipse) -> Real;
+    /// Whether another target's region comes within [`NEAR`] of the half
+    /// axes of region `mine`: identities are at stake there, so the step
+    /// observes all its hypotheses ([`crate::Config::sure_share`]).
+    fn near(&self, mine: &Ellipse) -> bool;
 }
 
 /// A lone target: nothing to keep apart from.
@@ -22,6 +26,9 @@ impl Apart for Alone {
     const ANY: bool = false;
     fn factor(&self, _: &Ellipse) -> Real {
         1.0
+    }
+    fn near(&self, _: &Ellipse) -> bool {
+        false
     }
 }
 
@@ -41,7 +48,18 @@ impl Apart for Others<'_> {
     fn factor(&self, e: &Ellipse) -> Real {
         apart(e, self.own.as_ref(), self.held)
     }
+    fn near(&self, mine: &Ellipse) -> bool {
+        let window = Ellipse { hx: NEAR * mine.hx, hy: NEAR * mine.hy, ..*mine }.to_box();
+        self.held.iter().any(|h| h.covered_by(&window) > 0.0)
+    }
 }
+
+/// Another target whose region reaches within this many of a target's half
+/// axes of its centre, about as far as its hypotheses spread, comes near
+/// it. Measured on the group fixtures (crossing, three targets, touching)
+/// over 16 seeds with a share of 0.6: at 1.5 or 2 targets swap on some
+/// seeds, at 3 on none.
+pub(crate) const NEAR: Real = 3.0;
 
 /// How much of a hypothesis's weight another target's region takes away:
 /// a hypothesis whose box lies wholly inside a box another target holds,

@@ -151,9 +151,11 @@ pub(crate) fn resample<R: Rng, const N: usize>(
     particles: &mut [Particle; N],
     weights: &mut [Real; N],
     copies: &mut [u16; N],
+    n: usize,
     method: Resampling,
     rng: &mut R,
 ) {
+    let n = n.clamp(1, N);
     let mut acc = 0.0;
     for w in weights.iter_mut() {
         acc += max(*w, 0.0);
@@ -170,7 +172,7 @@ pub(crate) fn resample<R: Rng, const N: usize>(
     };
     match method {
         Resampling::Multinomial => {
-            for _ in 0..N {
+            for _ in 0..n {
                 let u = unit_from_bits(rng.next_u32()) * acc;
                 // First index whose cumulative weight exceeds u; a zero-weight
                 // particle has the same cumulative sum as its predecessor and
@@ -179,10 +181,10 @@ pub(crate) fn resample<R: Rng, const N: usize>(
             }
         }
         Resampling::Systematic => {
-            let step = acc / N as Real;
+            let step = acc / n as Real;
             let u0 = unit_from_bits(rng.next_u32()) * step;
             let mut j = 0usize;
-            for i in 0..N {
+            for i in 0..n {
                 let u = u0 + i as Real * step;
                 while j + 1 < N && weights.get(j).is_some_and(|&c| c <= u) {
                     j += 1;
@@ -211,6 +213,21 @@ pub(crate) fn resample<R: Rng, const N: usize>(
             }
         }
     }
+    // Fewer draws than slots: the `n` drawn move to the front, in order
+    // (with all `N` drawn every slot is taken and nothing moves).
+    if n < N {
+        let mut k = 0usize;
+        for j in 0..N {
+            if copies.get(j).is_some_and(|&c| c != 0) {
+                if let Some(&p) = particles.get(j)
+                    && let Some(slot) = particles.get_mut(k)
+                {
+                    *slot = p;
+                }
+                k += 1;
+            }
+        }
+    }
 }
 
 /// The weighted mean state `E[S] = Σ π_i s_i` for normalised weights.
@@ -219,7 +236,7 @@ pub(crate) fn resample<R: Rng, const N: usize>(
 /// weighted mean always is, but rounding in the sum can push it a hair
 /// outside (found by the property tests: a centre at 22.000002 in a frame 22
 /// pixels high).
-pub(crate) fn mean_state<const N: usize>(particles: &[Particle; N], weights: &[Real; N]) -> Particle {
+pub(crate) fn mean_state(particles: &[Particle], weights: &[Real]) -> Particle {
     let mut m = Particle { hx: 0.0, hy: 0.0, ..Default::default() };
     let mut lo = Particle { x: Real::MAX, y: Real::MAX, hx: Real::MAX, hy: Real::MAX, ..Default::default() };
     let mut hi = Particle { x: Real::MIN, y: Real::MIN, hx: Real::MIN, hy: Real::MIN, ..Default::default() };
@@ -401,7 +418,7 @@ mod tests {
                 let mut set = line_particles::<N>();
                 let mut w = [0.0, 0.0, 0.75, 0.25];
                 let mut copies = [0u16; N];
-                resample(&mut set, &mut w, &mut copies, method, &mut rng);
+                resample(&mut set, &mut w, &mut copies, N, method, &mut rng);
                 for (c, n) in counts.iter_mut().zip(origins(&set)) {
                     *c += n;
                 }
@@ -423,7 +440,7 @@ mod tests {
             let mut set = line_particles::<N>();
             let mut w = [0.3, 0.0, 0.0, 0.5, 0.0, 0.0, 0.0, 0.0, 0.0, 0.2];
             let mut copies = [0u16; N];
-            resample(&mut set, &mut w, &mut copies, Resampling::Systematic, &mut rng);
+            resample(&mut set, &mut w, &mut copies, N, Resampling::Systematic, &mut rng);
             assert_eq!(origins(&set), [3, 0, 0, 5, 0, 0, 0, 0, 0, 2]);
         }
     }
@@ -445,7 +462,7 @@ mod tests {
             w[(pick.next_u32() % N as u32) as usize] += 1.0;
             let mut set = line_particles::<N>();
             let mut copies = [0u16; N];
-            resample(&mut set, &mut w, &mut copies, Resampling::Multinomial, &mut rng);
+            resample(&mut set, &mut w, &mut copies, N, Resampling::Multinomial, &mut rng);
             // `copies` ends as 1 for every slot; recount the draws from the set
             // and check they are consistent with the weights' support.
             let n = origins(&set);
@@ -458,16 +475,41 @@ mod tests {
     }
 
     #[test]
+    fn fewer_draws_fill_the_first_slots() {
+        // Reason: drawing n < N, the first n slots must hold exactly the
+        // draws. Systematic pointers are 1/n apart, so weights that are
+        // multiples of 1/n give exactly those copies whatever the offset:
+        // with n = 5 and weights 0.6, 0.4 on particles 2 and 7, three copies
+        // of 2 then two of 7, in the order of the originals.
+        const N: usize = 10;
+        let mut rng = Xoshiro128PlusPlus::seed_from_u64(4);
+        for _ in 0..100 {
+            let mut set = line_particles::<N>();
+            let mut w = [0.0, 0.0, 0.6, 0.0, 0.0, 0.0, 0.0, 0.4, 0.0, 0.0];
+            let mut copies = [0u16; N];
+            resample(&mut set, &mut w, &mut copies, 5, Resampling::Systematic, &mut rng);
+            let xs: [Real; 5] = core::array::from_fn(|i| set[i].x);
+            assert_eq!(xs, [2.0, 2.0, 2.0, 7.0, 7.0]);
+        }
+        // Multinomial draws land on weighted particles only, n of them.
+        let mut set = line_particles::<N>();
+        let mut w = [0.0, 0.0, 0.6, 0.0, 0.0, 0.0, 0.0, 0.4, 0.0, 0.0];
+        let mut copies = [0u16; N];
+        resample(&mut set, &mut w, &mut copies, 6, Resampling::Multinomial, &mut rng);
+        assert!(set[..6].iter().all(|p| p.x == 2.0 || p.x == 7.0), "{set:?}");
+    }
+
+    #[test]
     fn all_zero_weights_keep_the_set() {
         const N: usize = 5;
         let mut set = line_particles::<N>();
         let mut w = [0.0; N];
         let mut copies = [0u16; N];
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(1);
-        resample(&mut set, &mut w, &mut copies, Resampling::Multinomial, &mut rng);
+        resample(&mut set, &mut w, &mut copies, N, Resampling::Multinomial, &mut rng);
         assert_eq!(set, line_particles::<N>());
         let mut w = [Real::NAN; N];
-        resample(&mut set, &mut w, &mut copies, Resampling::Systematic, &mut rng);
+        resample(&mut set, &mut w, &mut copies, N, Resampling::Systematic, &mut rng);
         assert_eq!(set, line_particles::<N>());
     }
 

@@ -77,6 +77,9 @@ pub const KEYS: &[Key] = &[
     key("min_half_axis", "pixels", |c, k, v| set(&mut c.min_half_axis, num(k, v))),
     key("template", "off | WEIGHT:RATE (grey template cue, NCC, share WEIGHT, adaptation RATE)", template),
     key("life", "appearance | confidence:LOST:FOUND (what drives the tracking / lost states)", life),
+    key("sure_share", "share of the particles observed after a confident frame, (0, 1]", |c, k, v| {
+        set(&mut c.sure_share, num(k, v))
+    }),
     key("redetect", "on | off (re-drawn particles go where the target's colours stand out while lost)", |c, k, v| {
         set(&mut c.redetect, on_off(k, v))
     }),

@@ -234,9 +234,10 @@ fn config_of(settings: Option<&Bound<'_, PyDict>>) -> PyResult<Config> {
             }
             "scene_motion" => c.scene_motion = value.extract()?,
             "redetect" => c.redetect = value.extract()?,
+            "sure_share" => c.sure_share = value.extract()?,
             other => {
                 return Err(PyTypeError::new_err(format!(
-                    "unknown setting {other:?}: lost_below, found_above, alpha, lost_after, correlation, scene_motion, redetect"
+                    "unknown setting {other:?}: lost_below, found_above, alpha, lost_after, correlation, scene_motion, redetect, sure_share"
                 )));
             }
         }

@@ -85,7 +85,8 @@ pub(crate) struct Track<const N: usize, const K: usize, R, const T: usize> {
     config: Config,
     rng: R,
     particles: [Particle; N],
-    /// Normalised weights of `particles` after a step.
+    /// Normalised weights of `particles` after a step (0 past the
+    /// hypotheses it observed, [`Config::sure_share`]).
     weights: [Real; N],
     target: Option<Target<K>>,
     /// The likelihood table (table mode only; zero-sized when `T` is 0).
@@ -199,6 +200,12 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         self.state
     }
 
+    /// The weights after the last step.
+    #[cfg(test)]
+    pub(crate) fn weights(&self) -> &[Real; N] {
+        &self.weights
+    }
+
     /// The frame size the target was learnt on, once it has been.
     pub(crate) fn frame_size(&self) -> Option<(usize, usize)> {
         self.target.as_ref().map(|t| t.frame)
@@ -277,6 +284,8 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         self.weights = [1.0 / N as Real; N];
         self.state = TrackState::Tracking;
         self.misses = 0;
+        // No confidence yet: the first step observes every hypothesis.
+        self.diag = Diagnostics::default();
         self.cues.start(&self.config, frame, &e);
         Ok(Estimate::initialised(e, N as u16, self.config.likelihood.sigma_for(0.0)))
     }

@@ -52,13 +52,14 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         if size != target.frame {
             return Err(Error::FrameSizeChanged { expected: target.frame, got: size });
         }
-        self.predict(scratch, frame, prior);
-        let observed = self.observe(scratch, frame, apart);
-        let sigma = self.weigh(observed.d2_max);
+        let n = self.hypotheses(&apart);
+        self.predict(scratch, frame, prior, n);
+        let observed = self.observe(scratch, frame, apart, n);
+        let sigma = self.weigh(observed.d2_max, n);
         // An external size measurement, or the table's fixed size, decides
         // the size: no search then.
         let sized = prior.is_some() || (T > 0 && self.config.table.is_some());
-        let look = self.estimate(scratch, frame, &observed, !sized);
+        let look = self.estimate(scratch, frame, &observed, !sized, n);
         // Measured on every frame, so that its running means stay current.
         let stuck = self.cues.miss(&self.config, frame, &look.ellipse, self.state == TrackState::Tracking);
         let was_tracking = self.state == TrackState::Tracking;
@@ -77,14 +78,15 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         })
     }
 
-    /// Resamples in proportion to the last step's weights, moves every
-    /// particle by the dynamics, and, while the target is not tracked,
-    /// re-draws a share of them to keep exploring.
+    /// Resamples `n` hypotheses in proportion to the last step's weights
+    /// into the first slots, moves them by the dynamics, and, while the
+    /// target is not tracked, re-draws a share of them to keep exploring.
     pub(super) fn predict<const E: usize>(
         &mut self,
         scratch: &mut Scratch<K, E>,
         frame: &Frame<'_>,
         prior: Option<ScalePrior>,
+        n: usize,
     ) {
         let Track { config: cfg, rng, particles, weights, target, state, .. } = self;
         let Some(target) = target.as_ref() else { return };
@@ -92,8 +94,8 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         let bounds = Bounds { width: w as Real, height: h as Real, min_half: cfg.min_half_axis };
         // On the stack: the counts live only while the set is rewritten.
         let mut copies = [0u16; N];
-        resample(particles, weights, &mut copies, cfg.resampling, rng);
-        for p in particles.iter_mut() {
+        resample(particles, weights, &mut copies, n, cfg.resampling, rng);
+        for p in particles.iter_mut().take(n) {
             cfg.dynamics.propagate(p, &bounds, target.speed, rng);
             if let Some(prior) = &prior {
                 prior.apply(p);
@@ -127,12 +129,14 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         }
     }
 
-    /// Each particle's similarity with the models, left in `weights`.
+    /// The similarity with the models of each of the first `n` particles,
+    /// left in `weights` (0 for the others).
     pub(super) fn observe<const E: usize, A: Apart>(
         &mut self,
         scratch: &mut Scratch<K, E>,
         frame: &Frame<'_>,
         apart: A,
+        n: usize,
     ) -> Observed {
         let size = (frame.width(), frame.height());
         let table = if T > 0 { self.config.table } else { None };
@@ -141,7 +145,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         // Edges first, once, over the region the particles cover.
         let rect = target.models.edge.is_some().then(|| {
             let (mut x0, mut y0, mut x1, mut y1) = (size.0, size.1, 0, 0);
-            for p in particles.iter() {
+            for p in particles.iter().take(n) {
                 let (a, b, c, d) = cover(&p.ellipse(), size.0, size.1);
                 (x0, y0, x1, y1) = (x0.min(a), y0.min(b), x1.max(c), y1.max(d));
             }
@@ -159,7 +163,10 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         // 2^16) wait until the best one, their normaliser, is known.
         let mut scores = [0u16; N];
         let mut out = Observed { appearing: 0, g_best: 0, d2_max: target.models.d2_max(cfg) };
-        for ((p, w), g) in particles.iter().zip(weights.iter_mut()).zip(scores.iter_mut()) {
+        for w in weights.iter_mut().skip(n) {
+            *w = 0.0;
+        }
+        for ((p, w), g) in particles.iter().zip(weights.iter_mut()).zip(scores.iter_mut()).take(n) {
             let e = p.ellipse();
             let (rho, sim) = if table.is_some() {
                 tab.lookup(p.x, p.y)
@@ -194,26 +201,47 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         out
     }
 
-    /// Turns the similarities in `weights` into normalised likelihoods;
-    /// returns the σ used.
-    pub(super) fn weigh(&mut self, d2_max: Real) -> Real {
+    /// Turns the similarities of the first `n` particles in `weights` into
+    /// normalised likelihoods; returns the σ used.
+    pub(super) fn weigh(&mut self, d2_max: Real, n: usize) -> Real {
         let cfg = &self.config;
-        let best = self.weights.iter().fold(0.0 as Real, |a, &w| a.max(w));
-        let mean = self.weights.iter().sum::<Real>() / N as Real;
+        let n = n.clamp(1, N);
+        let (weights, _) = self.weights.split_at_mut(n);
+        let best = weights.iter().fold(0.0 as Real, |a, &w| a.max(w));
+        let mean = weights.iter().sum::<Real>() / n as Real;
         let (sigma, offset) = cfg.likelihood.sigma_and_offset(d2_max * (1.0 - best), d2_max * (1.0 - mean));
         let mut sum = 0.0;
-        for w in self.weights.iter_mut() {
+        for w in weights.iter_mut() {
             *w = cfg.likelihood.weight(d2_max * (1.0 - *w) - offset, sigma);
             sum += *w;
         }
         if sum > 0.0 && sum.is_finite() {
-            for w in self.weights.iter_mut() {
+            for w in weights.iter_mut() {
                 *w /= sum;
             }
         } else {
-            self.weights = [1.0 / N as Real; N];
+            weights.fill(1.0 / n as Real);
         }
         sigma
+    }
+
+    /// How many hypotheses this step draws and observes: a share of them
+    /// after a frame confidently on the target ([`crate::Config::sure_share`];
+    /// the last confidence is recomputed from its signals, which the
+    /// tracker keeps), unless `apart` has another target near; all of them
+    /// otherwise.
+    pub(crate) fn hypotheses<A: Apart>(&self, apart: &A) -> usize {
+        let cfg = &self.config;
+        let Life::Confidence { found_above, .. } = cfg.life else { return N };
+        if !(cfg.sure_share < 1.0) || self.state != TrackState::Tracking {
+            return N;
+        }
+        let d = &self.diag;
+        let sure = on_target(d.contrast, d.correlation, d.anchored) > found_above;
+        if !sure || self.held().is_some_and(|mine| apart.near(&mine)) {
+            return N;
+        }
+        ((cfg.sure_share * N as Real) as usize).clamp(2, N)
     }
 
     /// The weighted mean state, sized against the surroundings, and how it
@@ -224,9 +252,12 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         frame: &Frame<'_>,
         observed: &Observed,
         search: bool,
+        n: usize,
     ) -> Look {
         let Track { config: cfg, particles, weights, target, state, diag, cues, .. } = self;
-        let mut ellipse = mean_state(particles, weights).ellipse();
+        let n = n.min(N);
+        let mut ellipse =
+            mean_state(particles.get(..n).unwrap_or(particles), weights.get(..n).unwrap_or(weights)).ellipse();
         // The texture cue first, so that the searches and the confidence
         // measure the box where it leaves it.
         let psr = cues.place(cfg, frame, (&mut ellipse, particles), search);

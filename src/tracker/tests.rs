@@ -442,3 +442,55 @@ fn update_when_degraded_waits_for_the_model_to_go_bad() {
     let updated = (0..8).filter(|_| c.step(&frame(&clear)).unwrap().model_updated).count();
     assert!(updated >= 6, "the confident rule updates on confident frames: {updated} of 8");
 }
+
+#[test]
+fn a_confident_frame_is_followed_by_the_share_of_hypotheses() {
+    // Reason: the invariant of `Config::sure_share`: a step draws and
+    // observes all N hypotheses unless the step before was tracking with a
+    // confidence above `found_above`, and then `share · N` of them, the
+    // first ones (the others weigh 0). The scene's target is shown, then
+    // hidden under white (confidence falls, all are observed again), then
+    // shown again; both kinds of step must occur.
+    const N: usize = 40;
+    let cfg = Config { sure_share: 0.5, ..Config::default() };
+    let found_above = match cfg.life {
+        Life::Confidence { found_above, .. } => found_above,
+        Life::Appearance => unreachable!("the default life is confidence-driven"),
+    };
+    let mut t: Tracker<N> = Tracker::new(cfg, 7).unwrap();
+    let (shown, hidden) = (scene(None, 0), scene(Some((40, 25, 40, 40)), 0));
+    t.init(&frame(&shown), BOX).unwrap();
+    let mut expected = N;
+    let (mut fewer, mut all) = (0, 0);
+    for i in 0..30 {
+        let px = if (10..18).contains(&i) { &hidden } else { &shown };
+        let est = t.step(&frame(px)).unwrap();
+        let observed = t.weights().iter().take_while(|&&w| w > 0.0).count();
+        assert_eq!(observed, expected, "step {i}: hypotheses observed");
+        assert!(t.weights()[observed..].iter().all(|&w| w == 0.0), "step {i}: weight past the share");
+        let sum: Real = t.weights().iter().sum();
+        assert!((sum - 1.0).abs() < 1e-4, "step {i}: weights sum to {sum}");
+        if expected < N {
+            fewer += 1
+        } else {
+            all += 1
+        }
+        let sure = est.state == TrackState::Tracking && est.confidence > found_above;
+        expected = if sure { N / 2 } else { N };
+        if px == &shown && i > 20 {
+            let (cx, cy) = est.bbox().centre();
+            let inside = (44.0..76.0).contains(&cx) && (29.0..61.0).contains(&cy);
+            assert!(inside, "step {i}: centre ({cx}, {cy}) off the target");
+        }
+    }
+    assert!(fewer > 0 && all > 1, "both kinds of step: {fewer} with the share, {all} with all");
+}
+
+#[test]
+fn the_share_of_hypotheses_is_validated() {
+    for bad in [Real::NAN, 0.0, -0.5, 1.5, Real::INFINITY] {
+        let cfg = Config { sure_share: bad, ..Config::default() };
+        assert_eq!(cfg.validate().unwrap_err().field, "sure_share", "{bad}");
+    }
+    assert!(Config { sure_share: 0.01, ..Config::default() }.validate().is_ok());
+}
