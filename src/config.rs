@@ -112,8 +112,9 @@ pub struct Config {
     /// `found_above`); 1 (the default) observes all of them on every frame.
     /// Observing the hypotheses is most of a step's work, so a share trades
     /// accuracy for time where the target is easy: at 0.6 a QVGA frame
-    /// costs about a quarter fewer instructions, for a few thousandths of
-    /// AUC on the real sequences (docs/performance.md). In a
+    /// costs about a quarter fewer instructions, for 0.006 of AUC on the
+    /// real sequences and 0.02 of the confidence's ROC AUC
+    /// (docs/performance.md). In a
     /// [`crate::Group`], a target that another comes near observes all of
     /// its hypotheses whatever the share, so that identities hold (below
     /// 0.6 targets that cross can swap).

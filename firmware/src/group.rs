@@ -38,10 +38,14 @@ pub fn run(
     if n > TARGETS {
         fail!("{path} has {n} targets; this build's group holds {TARGETS}");
     }
-    if kind != "pf" {
-        fail!("tracker `{kind}`: a fixture of several targets is tracked by the particle filter's group (pf)");
-    }
-    let group = match make_group(seed) {
+    let share = match kind {
+        "pf" => 1.0,
+        "pf-sure" => crate::SURE_SHARE,
+        _ => fail!(
+            "tracker `{kind}`: a fixture of several targets is tracked by the particle filter's group (pf or pf-sure)"
+        ),
+    };
+    let group = match make_group(seed, share) {
         Ok(Some(g)) => g,
         Ok(None) => fail!("group taken"),
         Err(e) => fail!("{e}"),
@@ -120,11 +124,12 @@ pub fn run(
     false
 }
 
-/// Builds the group into a static (out of line, as `make_tracker`).
+/// Builds the group into a static (out of line, as `make_tracker`), its
+/// targets observing `sure_share` of their hypotheses after a confident frame.
 #[cfg(feature = "group")]
 #[inline(never)]
-fn make_group(seed: u64) -> Result<Option<&'static mut FwGroup>, pftrack::Error> {
-    let g = FwGroup::new(Config::default(), seed)?;
+fn make_group(seed: u64, sure_share: pftrack::Real) -> Result<Option<&'static mut FwGroup>, pftrack::Error> {
+    let g = FwGroup::new(Config { sure_share, ..Config::default() }, seed)?;
     Ok(cortex_m::singleton!(: FwGroup = g))
 }
 

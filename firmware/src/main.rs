@@ -117,6 +117,8 @@ fn run() -> bool {
         "pf" => make_tracker(seed).map(|t| t.map(Any::Pf)),
         #[cfg(feature = "all-options")]
         "pf-still" => make_still_tracker(seed).map(|t| t.map(Any::Pf)),
+        #[cfg(feature = "all-options")]
+        "pf-sure" => make_sure_tracker(seed).map(|t| t.map(Any::Pf)),
         "meanshift" => make_meanshift(MeanShiftConfig::default()).map(|t| t.map(Any::MeanShift)),
         "kalman" => make_meanshift(MeanShiftConfig::kalman()).map(|t| t.map(Any::MeanShift)),
         _ => fail!("tracker `{kind}` is not pf, meanshift or kalman"),
@@ -239,6 +241,22 @@ fn make_still_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftra
     let t = FwTracker::new(Config { scene_motion: false, ..Config::default() }, seed)?;
     Ok(cortex_m::singleton!(: FwTracker = t))
 }
+
+/// [`make_tracker`] observing [`SURE_SHARE`] of the hypotheses after a
+/// confident frame (`Config::sure_share`), in the build with the core's
+/// optional techniques, so that `audit/run` can report what the share saves.
+#[cfg(feature = "all-options")]
+#[inline(never)]
+fn make_sure_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
+    let t = FwTracker::new(Config { sure_share: SURE_SHARE, ..Config::default() }, seed)?;
+    Ok(cortex_m::singleton!(: FwTracker = t))
+}
+
+/// The share of hypotheses the audit's `pf-sure` trackers and groups observe
+/// after a confident frame: the least at which the group fixtures' targets
+/// keep their identities over 16 seeds (docs/several-targets.md).
+#[cfg(any(feature = "all-options", feature = "group"))]
+pub(crate) const SURE_SHARE: pftrack::Real = 0.6;
 
 #[inline(never)]
 fn pf_init(t: &mut FwTracker, frame: &Frame<'_>, bbox: BoundingBox) -> Result<Estimate, pftrack::Error> {
