@@ -4,7 +4,7 @@
 //! on nothing but the core and the fixture codecs, so it also builds for an
 //! ARMv6 Linux device (see the README).
 //!
-//! Usage: pftrack-trace FIXTURE [SEED [pf|colour|meanshift|kalman]]
+//! Usage: pftrack-trace FIXTURE [SEED [pf|pf-sure|colour|meanshift|kalman]]
 //!
 //! A fixture of several targets is tracked by a group of them all (the
 //! particle filter; mean shift follows one target), one line per target
@@ -24,7 +24,7 @@ type FwGroup = Group<3, 100>;
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some(path) = args.first() else {
-        eprintln!("usage: pftrack-trace FIXTURE [SEED [pf|colour|meanshift|kalman]]");
+        eprintln!("usage: pftrack-trace FIXTURE [SEED [pf|pf-sure|colour|meanshift|kalman]]");
         return ExitCode::FAILURE;
     };
     let seed = match args.get(1).map(|s| s.parse::<u64>()) {
@@ -52,15 +52,18 @@ fn run(path: &str, seed: u64, kind: &str) -> Result<(), String> {
     file.read_exact(&mut head).map_err(|_| "shorter than a fixture header".to_string())?;
     let h = Header::parse(&head).map_err(|e| e.to_string())?;
     let ms_config = match kind {
-        "pf" | "colour" => None,
+        "pf" | "pf-sure" | "colour" => None,
         "meanshift" => Some(MeanShiftConfig::default()),
         "kalman" => Some(MeanShiftConfig::kalman()),
-        _ => return Err(format!("tracker `{kind}` is not pf, colour, meanshift or kalman")),
+        _ => return Err(format!("tracker `{kind}` is not pf, pf-sure, colour, meanshift or kalman")),
     };
     // `colour`: the particle filter without the correlation filter, as the
-    // firmware built without its `correlation` feature runs it.
+    // firmware built without its `correlation` feature runs it; `pf-sure`:
+    // a share of the hypotheses after a confident frame, as the firmware's
+    // `pf-sure` tracker and group observe.
     let config = match kind {
         "colour" => Config { correlation: None, ..Config::default() },
+        "pf-sure" => Config { sure_share: 0.6, ..Config::default() },
         _ => Config::default(),
     };
     if h.targets > 1 {
