@@ -4,7 +4,7 @@
 use libfuzzer_sys::fuzz_target;
 use pftrack::{BoundingBox, Config, Frame, PixelFormat, Sigma, Tracker};
 
-fuzz_target!(|v: [f32; 15]| {
+fuzz_target!(|v: [f32; 16]| {
     let mut c = Config::default();
     c.likelihood.sigma = if v[0] >= 0.0 { Sigma::Fixed(v[1]) } else { Sigma::Adaptive { min: v[1], max: v[2] } };
     c.likelihood.eps = v[3];
@@ -19,6 +19,7 @@ fuzz_target!(|v: [f32; 15]| {
     c.reseed_fraction = v[12];
     c.min_half_axis = v[13];
     c.dynamics.speed_noise = v[14];
+    c.sure_share = v[15];
     if c.validate().is_err() {
         assert!(Tracker::<8>::new(c, 1).is_err(), "the constructor validates too");
         return;

@@ -12,7 +12,7 @@ use rand_xoshiro::Xoshiro128PlusPlus;
 
 fn config(pick: u8) -> Config {
     let d = Config::default();
-    match pick % 9 {
+    match pick % 10 {
         0 => d,
         1 => Config { quadrants: true, binning: Binning::Rgb4x4x4, ..d },
         2 => Config { quadrants: true, binning: Binning::Adaptive, ..d },
@@ -21,6 +21,7 @@ fn config(pick: u8) -> Config {
         5 => Config { model_update: ModelUpdate::WhenDegraded { factor: 0.9, frames: 2 }, ..d },
         6 => Config { boundary: Some(BoundaryCue { weight: 0.3 }), ..d },
         7 => Config { scene_motion: !d.scene_motion, ..d },
+        8 => Config { sure_share: 0.3, ..d },
         _ => Config { table: Some(TableMode { spacing: 1 }), ..d },
     }
 }
