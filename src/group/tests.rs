@@ -55,12 +55,14 @@ fn square(c: (f32, f32), s: usize) -> BoundingBox {
 fn a_group_of_one_is_a_tracker_with_the_same_seed() {
     // Reason: cross-check of two paths. With no other target there is
     // nothing to keep apart from, and target 0 draws from the group's seed,
-    // so the group repeats the lone tracker's computation bit for bit.
+    // so the group repeats the lone tracker's computation bit for bit, with
+    // all hypotheses or a share of them (no other target comes near).
     let path = |t: usize| (30.0 + 2.5 * t as f32, 48.0 + 6.0 * (t as f32 * 0.3).sin());
     let first = scene(&[path(0)], 16, 0);
-    for seed in [1, 7] {
-        let mut lone: Tracker<60> = Tracker::new(Config::default(), seed).unwrap();
-        let mut group: Group<2, 60> = Group::new(Config::default(), seed).unwrap();
+    let shared = Config { sure_share: 0.6, ..Config::default() };
+    for (seed, cfg) in [(1, Config::default()), (7, Config::default()), (1, shared), (7, shared)] {
+        let mut lone: Tracker<60> = Tracker::new(cfg, seed).unwrap();
+        let mut group: Group<2, 60> = Group::new(cfg, seed).unwrap();
         lone.init(&frame(&first), square(path(0), 16)).unwrap();
         let id = group.add(&frame(&first), square(path(0), 16)).unwrap().id;
         for t in 1..30 {
