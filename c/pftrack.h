@@ -119,6 +119,10 @@ typedef struct {
   // 1: re-drawn particles go where the target's colours stand out while
   // lost; 0: anywhere.
   uint8_t redetect;
+  // The share of the hypotheses observed on a frame after one confidently
+  // on the target, in `(0, 1]`; 1 observes all of them (fewer is faster,
+  // and a little less accurate).
+  float sure_share;
 } pftrack_config;
 
 // Storage for one tracker. Declare one per target (a `static` where the

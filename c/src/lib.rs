@@ -172,6 +172,10 @@ pub struct pftrack_config {
     /// 1: re-drawn particles go where the target's colours stand out while
     /// lost; 0: anywhere.
     pub redetect: u8,
+    /// The share of the hypotheses observed on a frame after one confidently
+    /// on the target, in `(0, 1]`; 1 observes all of them (fewer is faster,
+    /// and a little less accurate).
+    pub sure_share: f32,
 }
 
 /// Distinguishes storage made by [`pftrack_create`] from any other bytes.
@@ -296,6 +300,7 @@ fn config_of(c: &pftrack_config) -> Result<Config, Error> {
             .then_some(defaults.correlation.unwrap_or(CorrelationCue::MEASURED)),
         scene_motion: flag("scene_motion", c.scene_motion)?,
         redetect: flag("redetect", c.redetect)?,
+        sure_share: c.sure_share,
         ..defaults
     })
 }
@@ -322,6 +327,7 @@ pub unsafe extern "C" fn pftrack_config_default(out: *mut pftrack_config) -> i32
         correlation: d.correlation.is_some() as u8,
         scene_motion: d.scene_motion as u8,
         redetect: d.redetect as u8,
+        sure_share: d.sure_share,
     };
     // SAFETY: writable (the caller's promise).
     unsafe { out.write(c) };
@@ -579,6 +585,7 @@ mod tests {
             correlation: 0,
             scene_motion: 0,
             redetect: 0,
+            sure_share: 0.0,
         };
         // SAFETY: a writable config.
         assert_eq!(unsafe { pftrack_config_default(&mut c) }, PFTRACK_OK);
@@ -655,6 +662,9 @@ mod tests {
             assert_eq!(pftrack_init(&mut *t, &f, b, core::ptr::null_mut()), PFTRACK_ERR_CONFIG);
             let nan = pftrack_config { lost_below: f32::NAN, ..c };
             assert_eq!(pftrack_create(&mut *t, size, &nan, 1), PFTRACK_ERR_CONFIG);
+            let none = pftrack_config { sure_share: 0.0, ..c };
+            assert_eq!(pftrack_create(&mut *t, size, &none, 1), PFTRACK_ERR_CONFIG);
+            assert!(last_error(&mut t).contains("sure_share"), "{}", last_error(&mut t));
 
             assert_eq!(pftrack_create(&mut *t, size, &c, 1), PFTRACK_OK);
             assert_eq!(pftrack_step(&mut *t, &f, core::ptr::null_mut()), PFTRACK_ERR_NOT_INITIALISED);
