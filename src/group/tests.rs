@@ -171,9 +171,11 @@ fn targets_near_each_other_observe_all_their_hypotheses() {
     // it observes all of them, so the crossing (the targets 112 px apart
     // at first, overlapping in the middle) must see both, and, as with all
     // hypotheses, no swap on any of 16 seeds. (Measured: at a share of 0.5
-    // one seed of the 16 swaps; the docs give 0.6 as the least share.)
+    // one seed of the 16 swaps; without the correlation filter, at 0.6 one
+    // seed swaps and at 0.7 none, as docs/several-targets.md says.)
     const N: usize = 60;
-    let cfg = Config { sure_share: 0.6, ..Config::default() };
+    let share = if cfg!(feature = "correlation") { 0.6 } else { 0.7 };
+    let cfg = Config { sure_share: share, ..Config::default() };
     let (mut shared, mut all_near) = (0, 0);
     for seed in 1..=16 {
         assert_eq!(swaps_with(seed, cfg), 0, "seed {seed}: a swap or a merge");
@@ -197,7 +199,7 @@ fn targets_near_each_other_observe_all_their_hypotheses() {
                 if near {
                     assert_eq!(observed, N, "seed {seed} frame {t}: a target near another observes all");
                     all_near += 1;
-                } else if observed == 36 {
+                } else if observed == (share * N as Real) as usize {
                     shared += 1;
                 }
             }
