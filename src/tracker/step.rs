@@ -230,7 +230,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
     /// the last confidence is recomputed from its signals, which the
     /// tracker keeps), unless `apart` has another target near; all of them
     /// otherwise.
-    pub(crate) fn hypotheses<A: Apart>(&self, apart: &A) -> usize {
+    fn hypotheses<A: Apart>(&self, apart: &A) -> usize {
         let cfg = &self.config;
         let Life::Confidence { found_above, .. } = cfg.life else { return N };
         if !(cfg.sure_share < 1.0) || self.state != TrackState::Tracking {
