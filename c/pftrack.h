@@ -61,6 +61,19 @@
 // Semi-planar YUV 4:2:0: Y plane, then interleaved U, V, in one buffer.
 #define PFTRACK_FORMAT_NV12 6
 
+// `pftrack_config.redetect`: a missed target is looked for only where the
+// particles go.
+#define PFTRACK_REDETECT_OFF 0
+
+// `pftrack_config.redetect`: also at the places near its last one whose
+// colours stand out as its own, after a miss while its motion is unknown
+// (no step has found it since it was learnt) or while it moves more than
+// half its size a frame.
+#define PFTRACK_REDETECT_NEAR 1
+
+// `pftrack_config.redetect`: near, and over the whole frame while lost.
+#define PFTRACK_REDETECT_FRAME 2
+
 // The tracker searches for its target.
 #define PFTRACK_STATE_SEARCHING 0
 
@@ -116,8 +129,9 @@ typedef struct {
   uint8_t correlation;
   // 1: a box that moves with its surroundings counts as a miss; 0: off.
   uint8_t scene_motion;
-  // 1: re-drawn particles go where the target's colours stand out while
-  // lost; 0: anywhere.
+  // Where a missed target is looked for beyond the particles' reach:
+  // `PFTRACK_REDETECT_OFF`, `PFTRACK_REDETECT_NEAR` (the default) or
+  // `PFTRACK_REDETECT_FRAME`.
   uint8_t redetect;
   // The share of the hypotheses observed on a frame after one confidently
   // on the target, in `(0, 1]`; 1 observes all of them (fewer is faster,

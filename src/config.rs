@@ -12,6 +12,31 @@ use crate::likelihood::{Combination, Likelihood, Shape, Sigma};
 use crate::region::Sampling;
 use crate::scalar::Real;
 
+/// Where a missed target is looked for beyond the particles' reach: at the
+/// places whose colours stand out from their surroundings as the target's
+/// do, in the foreground map (see [`crate::foreground`]).
+#[derive(Copy, Clone, Debug, PartialEq, Eq, Hash, Default)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Redetect {
+    /// Only where the particles go.
+    Off,
+    /// Around the last place, when a tracked target is missed before any
+    /// step has found it since it was learnt (nothing is known of its
+    /// motion yet) or while it moves more than half its size a frame: it
+    /// may have left the particles' reach. A share of the particles
+    /// ([`Config::reseed_fraction`], halved) is drawn at the best places
+    /// within four half axes of its last estimate, with the velocity that
+    /// took it there. On the real sequences it does not act (their tracks
+    /// are the same as with `Off`); on a target moving most of its size a
+    /// frame it keeps it (docs/accuracy.md).
+    #[default]
+    Near,
+    /// [`Redetect::Near`], and over the whole frame while searching or
+    /// lost: half of the particles re-drawn each step go to the best
+    /// places, the other half anywhere.
+    Frame,
+}
+
 /// Everything that tunes a [`crate::Tracker`]. Start from [`Config::default`]
 /// and change fields; [`Config::validate`] (called by the tracker's
 /// constructor) rejects NaN, infinite and out-of-range values with a
@@ -102,10 +127,9 @@ pub struct Config {
     pub min_half_axis: Real,
     /// What drives the searching / tracking / lost states.
     pub life: Life,
-    /// Re-detection while searching or lost: half of the particles re-drawn
-    /// each step go where the target's colours stand out from the frame
-    /// (see [`crate::foreground`]), the other half anywhere.
-    pub redetect: bool,
+    /// Where a missed target is looked for beyond the particles' reach
+    /// (see [`Redetect`]).
+    pub redetect: Redetect,
     /// The share of the `N` particles, in `(0, 1]`, that are drawn and
     /// observed on a frame after one whose estimate was confidently on the
     /// target (tracking, with a confidence above [`Life::Confidence`]'s
@@ -331,7 +355,7 @@ impl Default for Config {
             reseed_fraction: 0.25,
             min_half_axis: 2.0,
             life: Life::Confidence { lost_below: 0.6, found_above: 0.8 },
-            redetect: false,
+            redetect: Redetect::Near,
             sure_share: 1.0,
             scene_motion: crate::motion::DEFAULT,
             size: Some(SizeSearch { step: 0.02, similarity: 1.0, aspect: true, aspect_pull: 0.03, scale_pull: 0.05 }),
@@ -352,7 +376,7 @@ impl Config {
             || self.size.is_some()
             || self.shift.is_some()
             || self.background_weight.is_some()
-            || self.redetect
+            || self.redetect != Redetect::Off
     }
 
     /// Whether some technique reads the grey-level template (see

@@ -24,7 +24,9 @@
 use core::ffi::c_char;
 use core::fmt::Write;
 use core::mem::{align_of, size_of};
-use pftrack::{BoundingBox, Config, CorrelationCue, Error, Event, Frame, Life, PixelFormat, TrackState, Tracker};
+use pftrack::{
+    BoundingBox, Config, CorrelationCue, Error, Event, Frame, Life, PixelFormat, Redetect, TrackState, Tracker,
+};
 
 /// Particles of every tracker made through this interface.
 pub const PFTRACK_PARTICLES: u32 = 100;
@@ -64,6 +66,17 @@ pub const PFTRACK_FORMAT_GRAY8: u32 = 4;
 pub const PFTRACK_FORMAT_I420: u32 = 5;
 /// Semi-planar YUV 4:2:0: Y plane, then interleaved U, V, in one buffer.
 pub const PFTRACK_FORMAT_NV12: u32 = 6;
+
+/// `pftrack_config.redetect`: a missed target is looked for only where the
+/// particles go.
+pub const PFTRACK_REDETECT_OFF: u8 = 0;
+/// `pftrack_config.redetect`: also at the places near its last one whose
+/// colours stand out as its own, after a miss while its motion is unknown
+/// (no step has found it since it was learnt) or while it moves more than
+/// half its size a frame.
+pub const PFTRACK_REDETECT_NEAR: u8 = 1;
+/// `pftrack_config.redetect`: near, and over the whole frame while lost.
+pub const PFTRACK_REDETECT_FRAME: u8 = 2;
 
 /// The tracker searches for its target.
 pub const PFTRACK_STATE_SEARCHING: u32 = 0;
@@ -169,8 +182,9 @@ pub struct pftrack_config {
     pub correlation: u8,
     /// 1: a box that moves with its surroundings counts as a miss; 0: off.
     pub scene_motion: u8,
-    /// 1: re-drawn particles go where the target's colours stand out while
-    /// lost; 0: anywhere.
+    /// Where a missed target is looked for beyond the particles' reach:
+    /// `PFTRACK_REDETECT_OFF`, `PFTRACK_REDETECT_NEAR` (the default) or
+    /// `PFTRACK_REDETECT_FRAME`.
     pub redetect: u8,
     /// The share of the hypotheses observed on a frame after one confidently
     /// on the target, in `(0, 1]`; 1 observes all of them (fewer is faster,
@@ -283,13 +297,18 @@ fn estimate_of(e: &pftrack::Estimate) -> pftrack_estimate {
     }
 }
 
+/// The configuration error naming `field`, out of its range.
+fn out_of_range(field: &'static str) -> Error {
+    Error::Config(pftrack::ConfigError { field, problem: pftrack::ParamProblem::OutOfRange })
+}
+
 /// The Rust configuration for `c`, or the error naming a flag that is
-/// neither 0 nor 1.
+/// neither 0 nor 1, or a choice that is none of its constants.
 fn config_of(c: &pftrack_config) -> Result<Config, Error> {
     let flag = |field: &'static str, v: u8| match v {
         0 => Ok(false),
         1 => Ok(true),
-        _ => Err(Error::Config(pftrack::ConfigError { field, problem: pftrack::ParamProblem::OutOfRange })),
+        _ => Err(out_of_range(field)),
     };
     let defaults = Config::default();
     Ok(Config {
@@ -299,7 +318,12 @@ fn config_of(c: &pftrack_config) -> Result<Config, Error> {
         correlation: flag("correlation", c.correlation)?
             .then_some(defaults.correlation.unwrap_or(CorrelationCue::MEASURED)),
         scene_motion: flag("scene_motion", c.scene_motion)?,
-        redetect: flag("redetect", c.redetect)?,
+        redetect: match c.redetect {
+            PFTRACK_REDETECT_OFF => Redetect::Off,
+            PFTRACK_REDETECT_NEAR => Redetect::Near,
+            PFTRACK_REDETECT_FRAME => Redetect::Frame,
+            _ => return Err(out_of_range("redetect")),
+        },
         sure_share: c.sure_share,
         ..defaults
     })
@@ -326,7 +350,11 @@ pub unsafe extern "C" fn pftrack_config_default(out: *mut pftrack_config) -> i32
         lost_after: d.lost_after,
         correlation: d.correlation.is_some() as u8,
         scene_motion: d.scene_motion as u8,
-        redetect: d.redetect as u8,
+        redetect: match d.redetect {
+            Redetect::Off => PFTRACK_REDETECT_OFF,
+            Redetect::Near => PFTRACK_REDETECT_NEAR,
+            Redetect::Frame => PFTRACK_REDETECT_FRAME,
+        },
         sure_share: d.sure_share,
     };
     // SAFETY: writable (the caller's promise).
@@ -662,6 +690,9 @@ mod tests {
             assert_eq!(pftrack_init(&mut *t, &f, b, core::ptr::null_mut()), PFTRACK_ERR_CONFIG);
             let nan = pftrack_config { lost_below: f32::NAN, ..c };
             assert_eq!(pftrack_create(&mut *t, size, &nan, 1), PFTRACK_ERR_CONFIG);
+            let unknown_choice = pftrack_config { redetect: 3, ..c };
+            assert_eq!(pftrack_create(&mut *t, size, &unknown_choice, 1), PFTRACK_ERR_CONFIG);
+            assert!(last_error(&mut t).contains("redetect"), "{}", last_error(&mut t));
             let none = pftrack_config { sure_share: 0.0, ..c };
             assert_eq!(pftrack_create(&mut *t, size, &none, 1), PFTRACK_ERR_CONFIG);
             assert!(last_error(&mut t).contains("sure_share"), "{}", last_error(&mut t));

@@ -5,14 +5,14 @@
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 use pftrack::{
-    Binning, BoundaryCue, BoundingBox, Config, Frame, MeanShift, MeanShiftConfig, ModelUpdate, PixelFormat, ScalePrior,
-    Shape, Similarity, TableMode, Tracker,
+    Binning, BoundaryCue, BoundingBox, Config, Frame, MeanShift, MeanShiftConfig, ModelUpdate, PixelFormat, Redetect,
+    ScalePrior, Shape, Similarity, TableMode, Tracker,
 };
 use rand_xoshiro::Xoshiro128PlusPlus;
 
 fn config(pick: u8) -> Config {
     let d = Config::default();
-    match pick % 10 {
+    match pick % 11 {
         0 => d,
         1 => Config { quadrants: true, binning: Binning::Rgb4x4x4, ..d },
         2 => Config { quadrants: true, binning: Binning::Adaptive, ..d },
@@ -22,6 +22,7 @@ fn config(pick: u8) -> Config {
         6 => Config { boundary: Some(BoundaryCue { weight: 0.3 }), ..d },
         7 => Config { scene_motion: !d.scene_motion, ..d },
         8 => Config { sure_share: 0.3, ..d },
+        9 => Config { redetect: Redetect::Frame, ..d },
         _ => Config { table: Some(TableMode { spacing: 1 }), ..d },
     }
 }

@@ -60,6 +60,19 @@ pub enum Story {
     /// The audit's scene with this many targets (2 or 3) of its size, of
     /// different colours, on paths of their own.
     AuditTargets(u8),
+    /// The camera pans: the whole background moves 8 px a frame to the
+    /// left while the target moves the other way across the frame.
+    Pan,
+    /// A 12x12 target zigzags at 10 px a frame, most of its width, across
+    /// the textured background.
+    SmallFast,
+    /// The target turns half a turn over the scene, its stripes and its
+    /// elongated outline with it (the truth is the turned ellipse's box).
+    Rotate,
+    /// Three decoys in the target's colours, in the same proportions, that
+    /// differ from it only in texture (stripes the other way, a
+    /// checkerboard, rings), pass close to it.
+    LookAlikes,
 }
 
 /// A scene to generate.
@@ -97,6 +110,10 @@ pub fn catalogue() -> Vec<SceneSpec> {
         s("cross_over", Story::CrossOver, PixelFormat::Rgb565, 50, 10),
         s("occlusion_i420", Story::Occlusion, PixelFormat::I420, 44, 11),
         s("fast", Story::Fast, PixelFormat::Rgb565, 40, 12),
+        s("pan", Story::Pan, PixelFormat::Rgb565, 40, 16),
+        s("small_fast", Story::SmallFast, PixelFormat::Yuv422, 40, 17),
+        s("rotate", Story::Rotate, PixelFormat::Rgb888, 30, 18),
+        s("look_alikes", Story::LookAlikes, PixelFormat::Rgb565, 44, 19),
         // Several targets each: apart, so that the tools that take one
         // target a fixture read `fixtures/*.pft` as before.
         s("groups/crossing", Story::Crossing, PixelFormat::Rgb565, 48, 13),
@@ -189,6 +206,27 @@ struct Blob {
     kind: usize,
 }
 
+/// The texture of a target or decoy in the target's colours.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Pattern {
+    /// Five bands across, horizontal (the target's own) or vertical.
+    Stripes { horizontal: bool },
+    /// Bands both ways, alternating like a checkerboard.
+    Checker,
+    /// Concentric rings, as wide as the stripes.
+    Rings,
+}
+
+/// A decoy: a blob of the target's size and colours.
+#[derive(Debug, Clone, Copy)]
+struct Decoy {
+    cx: f64,
+    cy: f64,
+    pattern: Pattern,
+    /// Offset of its outline's wobble from the target's, in frames.
+    phase: usize,
+}
+
 /// Where everything is in frame `t`.
 #[derive(Debug, Clone, Copy)]
 struct Layout {
@@ -199,8 +237,13 @@ struct Layout {
     b: f64,
     /// Optional opaque occluder rectangle: x0, y0, x1, y1 (exclusive).
     occluder: Option<[f64; 4]>,
-    /// Optional distractor centre (same size as the target).
-    distractor: Option<(f64, f64)>,
+    /// Decoys in the target's colours and size.
+    decoys: [Option<Decoy>; 3],
+    /// The target's turn from its upright pose, radians.
+    angle: f64,
+    /// How far the view has panned right: the background is drawn from
+    /// this many pixels further along.
+    pan: usize,
     /// Global illumination gain.
     gain: f64,
     /// The other targets of a scene with several, drawn behind the first
@@ -210,8 +253,18 @@ struct Layout {
 
 fn layout(story: Story, t: usize, n: usize, (w, h): (usize, usize)) -> Layout {
     let tf = t as f64;
-    let base =
-        Layout { cx: 64.0, cy: 48.0, a: 11.0, b: 13.0, occluder: None, distractor: None, gain: 1.0, others: [None; 2] };
+    let base = Layout {
+        cx: 64.0,
+        cy: 48.0,
+        a: 11.0,
+        b: 13.0,
+        occluder: None,
+        decoys: [None; 3],
+        angle: 0.0,
+        pan: 0,
+        gain: 1.0,
+        others: [None; 2],
+    };
     match story {
         Story::SmoothScale | Story::GraySmooth => {
             let s = 1.0 + 0.4 * tf / (n as f64 - 1.0).max(1.0);
@@ -240,7 +293,46 @@ fn layout(story: Story, t: usize, n: usize, (w, h): (usize, usize)) -> Layout {
             Layout { cx: 40.0 + 1.2 * tf, cy: 50.0, occluder: Some([left, 20.0, left + 34.0, 80.0]), ..base }
         }
         Story::Distractor => {
-            Layout { cx: 30.0 + 1.5 * tf, cy: 40.0, distractor: Some((100.0 - 1.5 * tf, 58.0)), ..base }
+            let decoy =
+                Decoy { cx: 100.0 - 1.5 * tf, cy: 58.0, pattern: Pattern::Stripes { horizontal: false }, phase: 5 };
+            Layout { cx: 30.0 + 1.5 * tf, cy: 40.0, decoys: [Some(decoy), None, None], ..base }
+        }
+        Story::Pan => {
+            // In frame coordinates the target moves right 1.5 px a frame
+            // while everything behind it moves left 8: 9.5 px a frame
+            // against the background.
+            Layout { cx: 30.0 + 1.5 * tf, cy: 48.0 + 10.0 * (tf / 6.0).sin(), pan: 8 * t, ..base }
+        }
+        Story::SmallFast => {
+            // A triangle wave between x = 10 and 118 at 10 px a frame, and a
+            // vertical swing of ±24 px.
+            let (lo, hi, speed) = (10.0, 118.0, 10.0);
+            let phase = (speed * tf) % (2.0 * (hi - lo));
+            let cx = if phase < hi - lo { lo + phase } else { hi - (phase - (hi - lo)) };
+            Layout { cx, cy: 48.0 + 24.0 * (2.0 * PI * tf / 17.0).sin(), a: 6.0, b: 6.0, ..base }
+        }
+        Story::Rotate => {
+            // Half a turn over the scene, while drifting slowly.
+            let angle = PI * tf / (n as f64 - 1.0).max(1.0);
+            Layout { cx: 52.0 + 0.8 * tf, cy: 48.0 + 6.0 * (tf / 8.0).sin(), a: 16.0, b: 11.0, angle, ..base }
+        }
+        Story::LookAlikes => {
+            // The target crosses the middle. A decoy with its stripes the
+            // other way comes the other way along the same line and passes
+            // behind it; a checkerboard passes above, its outline a pixel
+            // from the target's; rings ride alongside below, as close.
+            let decoy = |cx, cy, pattern, phase| Some(Decoy { cx, cy, pattern, phase });
+            let cy = 48.0 + 3.0 * (tf / 5.0).sin();
+            Layout {
+                cx: 24.0 + 1.4 * tf,
+                cy,
+                decoys: [
+                    decoy(110.0 - 1.6 * tf, 48.0, Pattern::Stripes { horizontal: false }, 5),
+                    decoy(100.0 - 1.2 * tf, cy - 27.0, Pattern::Checker, 9),
+                    decoy(14.0 + 1.3 * tf, cy + 27.0, Pattern::Rings, 13),
+                ],
+                ..base
+            }
         }
         Story::Fast => {
             // A triangle wave between x = 22 and 106 at 18 px a frame (the
@@ -361,9 +453,30 @@ fn in_blob(dx: f64, dy: f64, a: f64, b: f64, t: usize) -> bool {
     r2 <= k * k
 }
 
-/// The colour of a striped blob at `(dx, dy)` from its centre.
-fn blob_colour(dx: f64, dy: f64, b: f64, horizontal: bool) -> [f64; 3] {
-    kind_colour(dx, dy, b, horizontal, 0)
+/// The colour at `(dx, dy)` from the centre of a blob in the target's
+/// colours, textured with `pattern`.
+fn blob_colour(dx: f64, dy: f64, b: f64, pattern: Pattern) -> [f64; 3] {
+    let band = |u: f64| ((u + b) / (2.0 * b / 5.0)).floor() as i64;
+    let stripe = match pattern {
+        Pattern::Stripes { horizontal } => return kind_colour(dx, dy, b, horizontal, 0),
+        Pattern::Checker => band(dx) + band(dy),
+        // Rings as wide as the stripes, the middle one of the body colour.
+        Pattern::Rings => ((dx * dx + dy * dy).sqrt() / (2.0 * b / 5.0) + 0.5).floor() as i64,
+    };
+    if stripe.rem_euclid(2) == 1 { STRIPE } else { BODY }
+}
+
+/// `(dx, dy)` in the frame of a blob turned by `angle`.
+fn unturn(dx: f64, dy: f64, angle: f64) -> (f64, f64) {
+    let (s, c) = angle.sin_cos();
+    (dx * c + dy * s, dy * c - dx * s)
+}
+
+/// Half width and half height of the box around an ellipse of half axes
+/// `(a, b)` turned by `angle`.
+fn turned_box(a: f64, b: f64, angle: f64) -> (f64, f64) {
+    let (s, c) = angle.sin_cos();
+    ((a * a * c * c + b * b * s * s).sqrt(), (a * a * s * s + b * b * c * c).sqrt())
 }
 
 /// [`blob_colour`] in the colours of [`KINDS`]`[kind]`.
@@ -375,16 +488,23 @@ fn kind_colour(dx: f64, dy: f64, b: f64, horizontal: bool, kind: usize) -> [f64;
     if band.rem_euclid(2) == 1 { stripe } else { body }
 }
 
-/// Per mille of the nominal ellipse `(cx, cy, a, b)` that is in a `w × h`
-/// frame and not `hidden`.
-fn visibility((cx, cy, a, b): (f64, f64, f64, f64), (w, h): (usize, usize), hidden: impl Fn(f64, f64) -> bool) -> u16 {
+/// Per mille of the nominal ellipse `(cx, cy, a, b)`, turned by `angle`,
+/// that is in a `w × h` frame and not `hidden`.
+fn visibility(
+    (cx, cy, a, b): (f64, f64, f64, f64),
+    angle: f64,
+    (w, h): (usize, usize),
+    hidden: impl Fn(f64, f64) -> bool,
+) -> u16 {
     let (mut total, mut seen) = (0u32, 0u32);
-    let (x0, x1) = ((cx - a).floor() as i64, (cx + a).ceil() as i64);
-    let (y0, y1) = ((cy - b).floor() as i64, (cy + b).ceil() as i64);
+    let (hw, hh) = turned_box(a, b, angle);
+    let (x0, x1) = ((cx - hw).floor() as i64, (cx + hw).ceil() as i64);
+    let (y0, y1) = ((cy - hh).floor() as i64, (cy + hh).ceil() as i64);
     for y in y0..=y1 {
         for x in x0..=x1 {
             let (px, py) = (x as f64 + 0.5, y as f64 + 0.5);
-            if ((px - cx) / a).powi(2) + ((py - cy) / b).powi(2) <= 1.0 {
+            let (u, v) = unturn(px - cx, py - cy, angle);
+            if (u / a).powi(2) + (v / b).powi(2) <= 1.0 {
                 total += 1;
                 let on = x >= 0 && y >= 0 && (x as usize) < w && (y as usize) < h;
                 if on && !hidden(px, py) {
@@ -428,7 +548,10 @@ fn background(w: usize, h: usize, rng: &mut Xoshiro256PlusPlus) -> Vec<[f64; 3]>
 pub fn generate(spec: &SceneSpec) -> Fixture {
     let (w, h) = (spec.width, spec.height);
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(spec.seed);
-    let bg = background(w, h, &mut rng);
+    // A panning view draws its background from a strip as wide as the
+    // frame plus the whole pan.
+    let bw = w + layout(spec.story, spec.frames.saturating_sub(1), spec.frames, (w, h)).pan;
+    let bg = background(bw, h, &mut rng);
     let bpp = spec.format.bytes_per_pixel();
     let stride = w * bpp;
     let mut frames = Vec::with_capacity(spec.frames);
@@ -441,22 +564,22 @@ pub fn generate(spec: &SceneSpec) -> Fixture {
             for x in 0..w {
                 // Pixel centres, in the continuous coordinates of the ground truth.
                 let (px, py) = (x as f64 + 0.5, y as f64 + 0.5);
-                let mut c = bg[y * w + x];
+                let mut c = bg[y * bw + x + l.pan];
                 for o in l.others.iter().flatten() {
                     let (dx, dy) = (px - o.cx, py - o.cy);
                     if in_blob(dx, dy, o.a, o.b, t + 3) {
                         c = kind_colour(dx, dy, o.b, true, o.kind);
                     }
                 }
-                if let Some((dx0, dy0)) = l.distractor {
-                    let (dx, dy) = (px - dx0, py - dy0);
-                    if in_blob(dx, dy, l.a, l.b, t + 5) {
-                        c = blob_colour(dx, dy, l.b, false);
+                for d in l.decoys.iter().flatten() {
+                    let (dx, dy) = (px - d.cx, py - d.cy);
+                    if in_blob(dx, dy, l.a, l.b, t + d.phase) {
+                        c = blob_colour(dx, dy, l.b, d.pattern);
                     }
                 }
-                let (dx, dy) = (px - l.cx, py - l.cy);
+                let (dx, dy) = unturn(px - l.cx, py - l.cy, l.angle);
                 if in_blob(dx, dy, l.a, l.b, t) {
-                    c = blob_colour(dx, dy, l.b, true);
+                    c = blob_colour(dx, dy, l.b, Pattern::Stripes { horizontal: true });
                 }
                 if occluded(px, py) {
                     c = OCCLUDER;
@@ -475,7 +598,8 @@ pub fn generate(spec: &SceneSpec) -> Fixture {
         }
         // Visibility: nominal-ellipse pixels (on or off frame) that are on the
         // frame and not under the occluder, nor under a target drawn in front.
-        let visible_permille = visibility((l.cx, l.cy, l.a, l.b), (w, h), occluded);
+        let visible_permille = visibility((l.cx, l.cy, l.a, l.b), l.angle, (w, h), occluded);
+        let (hw, hh) = turned_box(l.a, l.b, l.angle);
         let others = l
             .others
             .iter()
@@ -483,7 +607,8 @@ pub fn generate(spec: &SceneSpec) -> Fixture {
             .filter_map(|(i, o)| o.map(|o| (i, o)))
             .map(|(i, o)| {
                 let in_front = |px: f64, py: f64| {
-                    in_blob(px - l.cx, py - l.cy, l.a, l.b, t)
+                    let (u, v) = unturn(px - l.cx, py - l.cy, l.angle);
+                    in_blob(u, v, l.a, l.b, t)
                         || l.others.iter().skip(i + 1).flatten().any(|f| in_blob(px - f.cx, py - f.cy, f.a, f.b, t + 3))
                 };
                 RecordMeta {
@@ -493,14 +618,14 @@ pub fn generate(spec: &SceneSpec) -> Fixture {
                         (2.0 * o.a) as f32,
                         (2.0 * o.b) as f32,
                     ),
-                    visible_permille: visibility((o.cx, o.cy, o.a, o.b), (w, h), |x, y| {
+                    visible_permille: visibility((o.cx, o.cy, o.a, o.b), 0.0, (w, h), |x, y| {
                         occluded(x, y) || in_front(x, y)
                     }),
                 }
             })
             .collect();
         frames.push(FixtureFrame {
-            truth: BoundingBox::new((l.cx - l.a) as f32, (l.cy - l.b) as f32, (2.0 * l.a) as f32, (2.0 * l.b) as f32),
+            truth: BoundingBox::new((l.cx - hw) as f32, (l.cy - hh) as f32, (2.0 * hw) as f32, (2.0 * hh) as f32),
             visible_permille,
             others,
             pixels: encode(&rgb, w, h, spec.format),

@@ -3,7 +3,7 @@
 //! validated by the core afterwards, so this only parses.
 
 use pftrack::{
-    Binning, Combination, Config, EdgeCue, Life, ModelUpdate, Resampling, Sampling, Shape, Sigma, Similarity,
+    Binning, Combination, Config, EdgeCue, Life, ModelUpdate, Redetect, Resampling, Sampling, Shape, Sigma, Similarity,
     SizeSearch,
 };
 
@@ -80,9 +80,12 @@ pub const KEYS: &[Key] = &[
     key("sure_share", "share of the particles observed after a confident frame, (0, 1]", |c, k, v| {
         set(&mut c.sure_share, num(k, v))
     }),
-    key("redetect", "on | off (re-drawn particles go where the target's colours stand out while lost)", |c, k, v| {
-        set(&mut c.redetect, on_off(k, v))
-    }),
+    key(
+        "redetect",
+        "off | near | frame (where a missed target is looked for: near its last place after a miss while its motion \
+         is unknown or fast, and also over the frame while lost)",
+        redetect,
+    ),
     key(
         "scene_motion",
         "on | off (a box that moves with its surroundings counts as a miss, for a target seen to move)",
@@ -152,6 +155,11 @@ fn on_off(key: &str, v: &str) -> Result<bool, String> {
 fn sampling(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
     let options = [("full", Sampling::Full), ("checkerboard", Sampling::Checkerboard), ("quarter", Sampling::Quarter)];
     set(&mut c.sampling, choice(key, v, &options))
+}
+
+fn redetect(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    let options = [("off", Redetect::Off), ("near", Redetect::Near), ("frame", Redetect::Frame)];
+    set(&mut c.redetect, choice(key, v, &options))
 }
 
 fn resampling(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
@@ -398,7 +406,7 @@ mod tests {
                 "size" => "0.05:2",
                 "shift" => "0.1:2:1:0.5",
                 "life" => "appearance",
-                "redetect" => "on",
+                "redetect" => "frame",
                 "scene_motion" => "off",
                 "correlation" => "off",
                 "background_weight" => "1",

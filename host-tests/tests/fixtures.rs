@@ -4,7 +4,7 @@
 use host_tests::fixture::Fixture;
 use host_tests::metrics::centre_error;
 use host_tests::scene::{catalogue, generate};
-use pftrack::{BoundingBox, Config, Estimate, Event, Frame, TrackState, Tracker};
+use pftrack::{BoundingBox, Config, Estimate, Event, Frame, Redetect, TrackState, Tracker};
 use std::path::PathBuf;
 
 /// Seeds every tracking claim is checked under: a claim that holds for one
@@ -421,9 +421,103 @@ fn follows_a_target_that_moves_most_of_its_width_a_frame() {
         assert!(got >= 0.7, "seed {seed}: on target on {got:.2} of frames");
         let with = share_on_target(&fx, colour, seed);
         assert!(with >= 0.7, "seed {seed}: colour cues alone, on target on {with:.2} of frames");
-        let mut slow = colour;
+        // Without re-detection near the target too, which finds a target
+        // that the particles no longer reach (it rescues seed 2: 0.64).
+        let mut slow = Config { redetect: Redetect::Off, ..colour };
         slow.dynamics.speed_noise = 0.0;
         let without = share_on_target(&fx, slow, seed);
         assert!(without < 0.5, "seed {seed}: without the speed noise, on target on {without:.2} of frames");
     }
+}
+
+/// Frames after the first on which the tracker reported anything but
+/// tracking.
+fn not_tracking(est: &[Estimate]) -> usize {
+    est.iter().filter(|e| e.state != TrackState::Tracking).count()
+}
+
+#[test]
+fn follows_a_target_while_the_view_pans() {
+    // Reason: exact truth from the generator: the whole background moves
+    // 8 px a frame to the left while the target moves 1.5 px a frame to
+    // the right, 9.5 px a frame against its surroundings. The mean IoU must
+    // reach 0.6 (measured over seeds 1-16: 0.82 to 0.91), and the tracker
+    // must never report the target lost: its surroundings move, but not
+    // with the box, so the surroundings-motion test must not take the
+    // target for background.
+    let fx = load("pan");
+    for seed in SEEDS {
+        let (est, _) = run(&fx, seed);
+        let (got, _) = mean_ious(&fx, &est);
+        assert!(got >= 0.6, "seed {seed}: mean IoU {got:.2}");
+        assert_eq!(not_tracking(&est), 0, "seed {seed}: reported not tracking");
+    }
+}
+
+#[test]
+fn keeps_a_small_target_that_moves_most_of_its_size_a_frame() {
+    // Reason: exact truth from the generator: a 12x12 target zigzags at 10
+    // px a frame across the frame with a vertical swing of up to 9 px a
+    // frame, up to 1.1 of its size a frame, and it moves 13 px in the
+    // first frame, before the tracker has seen it move. Over 16 seeds the
+    // mean IoU must reach 0.5 and no frame may be reported lost (measured:
+    // 0.64 to 0.73, none). Without re-detection near the target
+    // (`Redetect::Off`) the particles lose it at the start and at the
+    // turns: every seed falls short of one bar or the other (measured:
+    // 0.26 to 0.48, 8 to 20 frames not tracking), so the bar tests the
+    // re-detection.
+    let fx = load("small_fast");
+    let off = Config { redetect: Redetect::Off, ..Config::default() };
+    for seed in 1..=16 {
+        let (est, _) = run(&fx, seed);
+        let (got, _) = mean_ious(&fx, &est);
+        assert!(got >= 0.5, "seed {seed}: mean IoU {got:.2}");
+        assert_eq!(not_tracking(&est), 0, "seed {seed}: reported not tracking");
+        let (est, _) = run_with(&fx, off, seed);
+        let (without, _) = mean_ious(&fx, &est);
+        assert!(
+            without < 0.5 || not_tracking(&est) > 0,
+            "seed {seed}: without re-detection, mean IoU {without:.2} and always tracking"
+        );
+    }
+}
+
+#[test]
+fn follows_a_target_that_turns_half_a_turn() {
+    // Reason: exact truth from the generator: an elongated striped target
+    // (32x22 px) turns half a turn over 30 frames, its stripes with it;
+    // the truth is the turned ellipse's box, from 32x22 through 22x32 and
+    // back. The mean IoU must reach 0.6 (measured over seeds 1-16: 0.62 to
+    // 0.67), and no frame may be reported lost.
+    let fx = load("rotate");
+    for seed in SEEDS {
+        let (est, _) = run(&fx, seed);
+        let (got, _) = mean_ious(&fx, &est);
+        assert!(got >= 0.6, "seed {seed}: mean IoU {got:.2}");
+        assert_eq!(not_tracking(&est), 0, "seed {seed}: reported not tracking");
+    }
+}
+
+#[test]
+fn stays_on_a_target_among_look_alikes() {
+    // Reason: exact truth from the generator: three decoys in the target's
+    // colours, in the same proportions, differ from it only in texture;
+    // one passes behind it head on, one passes a pixel above its outline
+    // and one rides alongside it as close below. Over 16 seeds the
+    // estimate's centre must stay inside the target's true ellipse on
+    // every frame. The colour histogram alone (no edge cue, no correlation
+    // filter) cannot tell them apart: it must leave the target on some
+    // seed (measured: on 14 of the 16, for up to 10 frames), so the bar
+    // tests the texture cues.
+    let fx = load("look_alikes");
+    let colour_alone = Config { edges: None, correlation: None, ..Config::default() };
+    let mut lost_by_colour = 0;
+    for seed in 1..=16 {
+        let (est, _) = run(&fx, seed);
+        let off = est.iter().zip(&fx.frames[1..]).position(|(e, f)| !on_target(e, &f.truth));
+        assert_eq!(off, None, "seed {seed}: off the target from frame {:?}", off.map(|i| i + 1));
+        let (est, _) = run_with(&fx, colour_alone, seed);
+        lost_by_colour += usize::from(est.iter().zip(&fx.frames[1..]).any(|(e, f)| !on_target(e, &f.truth)));
+    }
+    assert!(lost_by_colour > 0, "the colour histogram alone stays on the target on every seed");
 }

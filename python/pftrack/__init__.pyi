@@ -27,8 +27,9 @@ class Tracker:
     ``particles`` is 25, 50, 100, 200 or 400 (fewer run faster; any other
     count raises ``ValueError``); ``seed`` makes runs repeatable; ``rgb``
     reads HxWx3 arrays as RGB instead of OpenCV's BGR. Settings:
-    ``lost_below``, ``found_above``, ``alpha`` (floats), ``lost_after``
-    (int), ``correlation``, ``scene_motion``, ``redetect`` (bools). Bad
+    ``lost_below``, ``found_above``, ``alpha``, ``sure_share`` (floats),
+    ``lost_after`` (int), ``correlation``, ``scene_motion`` (bools),
+    ``redetect`` (``"off"``, ``"near"``, the default, or ``"frame"``). Bad
     settings raise ``ValueError`` (out of range) or ``TypeError`` (unknown).
     """
 
@@ -44,7 +45,8 @@ class Tracker:
         lost_after: int = ...,
         correlation: bool = ...,
         scene_motion: bool = ...,
-        redetect: bool = ...,
+        redetect: str = ...,
+        sure_share: float = ...,
     ) -> None: ...
     def init(self, frame: FrameLike, box_: Box, raw: Optional[Raw] = None) -> bool:
         """Learns the target in ``box_`` and tracks it from there (again to re-initialise).

@@ -2,7 +2,9 @@
 //! NumPy frames, with the core's determinism and errors.
 
 use numpy::{PyReadonlyArray2, PyReadonlyArray3, PyUntypedArrayMethods};
-use pftrack::{BoundingBox, Config, CorrelationCue, Error, Event, Frame, Life, PixelFormat, TrackState, Tracker};
+use pftrack::{
+    BoundingBox, Config, CorrelationCue, Error, Event, Frame, Life, PixelFormat, Redetect, TrackState, Tracker,
+};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
@@ -233,7 +235,18 @@ fn config_of(settings: Option<&Bound<'_, PyDict>>) -> PyResult<Config> {
                 c.correlation = value.extract::<bool>()?.then_some(c.correlation.unwrap_or(CorrelationCue::MEASURED))
             }
             "scene_motion" => c.scene_motion = value.extract()?,
-            "redetect" => c.redetect = value.extract()?,
+            "redetect" => {
+                c.redetect = match value.extract::<String>()?.as_str() {
+                    "off" => Redetect::Off,
+                    "near" => Redetect::Near,
+                    "frame" => Redetect::Frame,
+                    other => {
+                        return Err(PyValueError::new_err(format!(
+                            "redetect: {other:?} is none of \"off\", \"near\", \"frame\""
+                        )));
+                    }
+                }
+            }
             "sure_share" => c.sure_share = value.extract()?,
             other => {
                 return Err(PyTypeError::new_err(format!(

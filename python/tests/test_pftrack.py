@@ -200,6 +200,10 @@ def test_bad_input_raises_not_crashes():
         pftrack.Tracker(lost_below=2.0)
     with pytest.raises(TypeError, match="unknown setting"):
         pftrack.Tracker(sigma=0.2)
+    with pytest.raises(ValueError, match="redetect"):
+        pftrack.Tracker(redetect="everywhere")
+    for choice in ("off", "near", "frame"):
+        pftrack.Tracker(redetect=choice)
     t.init(square(0), (40, 50, 20, 20))
     with pytest.raises(ValueError, match="initialised on 160x120"):
         t.update(square(0, size=(60, 80)))

@@ -93,6 +93,10 @@ pub(crate) struct Track<const N: usize, const K: usize, R, const T: usize> {
     table: Table<T>,
     state: TrackState,
     misses: u16,
+    /// Whether a step has found the target since it was learnt: until one
+    /// has, nothing is known of its motion, and a step that misses it
+    /// looks for it around its last place further than the particles reach.
+    settled: bool,
     /// The signals behind the last confidence.
     diag: Diagnostics,
     /// The cues with state of their own.
@@ -250,6 +254,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
             target: None,
             state: TrackState::Searching,
             misses: 0,
+            settled: false,
             diag: Diagnostics::default(),
             cues: Cues::new(),
         }
@@ -263,6 +268,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         self.target = None;
         self.state = TrackState::Searching;
         self.misses = 0;
+        self.settled = false;
         self.diag = Diagnostics::default();
         self.cues = Cues::new();
     }
@@ -284,6 +290,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         self.weights = [1.0 / N as Real; N];
         self.state = TrackState::Tracking;
         self.misses = 0;
+        self.settled = false;
         // No confidence yet: the first step observes every hypothesis.
         self.diag = Diagnostics::default();
         self.cues.start(&self.config, frame, &e);
@@ -309,6 +316,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         self.weights = [1.0 / N as Real; N];
         self.state = TrackState::Searching;
         self.misses = 0;
+        self.settled = false;
         self.cues.start(&self.config, frame, &Ellipse::from_box(&bbox));
         Ok(())
     }

@@ -138,21 +138,27 @@ pub(super) const SPOTS: usize = 4;
 
 /// The centres of the (at most [`SPOTS`]) target-sized boxes of `frame`
 /// that stand out most from their surroundings in the foreground map,
-/// best first, at least one box apart.
+/// best first, at least one box apart, among the centres in `area`
+/// (`x0, y0, x1, y1`) that keep the box in the frame.
 pub(super) fn redetect<const K: usize>(
     map: &mut ForegroundMap<FG_CELLS>,
     frame: &Frame<'_>,
     models: &Models<K>,
     (hx, hy): (Real, Real),
+    area: (Real, Real, Real, Real),
 ) -> [Option<(Real, Real)>; SPOTS] {
-    let (w, h) = (frame.width() as i32, frame.height() as i32);
-    map.compute(frame, (0, 0, w, h), &models.layout, &models.fg);
+    let (w, h) = (frame.width() as Real, frame.height() as Real);
+    let (x0, y0, x1, y1) = (area.0.max(hx), area.1.max(hy), area.2.min(w - hx), area.3.min(h - hy));
+    // The map covers the boxes' surroundings too (it clips to the frame).
+    let (rx, ry) = (RING * hx, RING * hy);
+    let rect = ((x0 - rx) as i32, (y0 - ry) as i32, (x1 + rx) as i32 + 1, (y1 + ry) as i32 + 1);
+    map.compute(frame, rect, &models.layout, &models.fg);
     let stride = hx.min(hy).max(map.step() as Real);
     let mut best: [Option<(Real, Real, Real)>; SPOTS] = [None; SPOTS];
-    let mut y = hy;
-    while y < h as Real - hy {
-        let mut x = hx;
-        while x < w as Real - hx {
+    let mut y = y0;
+    while y < y1 {
+        let mut x = x0;
+        while x < x1 {
             if let Some(c) = map.contrast(&Ellipse { cx: x, cy: y, hx, hy }, RING) {
                 // Insert into the list if it beats an entry and is not next to a better one.
                 let near = |&(bx, by, _): &(Real, Real, Real)| (bx - x).abs() < 2.0 * hx && (by - y).abs() < 2.0 * hy;

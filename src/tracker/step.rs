@@ -5,7 +5,7 @@ use super::scratch::*;
 use super::search::*;
 use super::{ScalePrior, Track, Tracker};
 use crate::apart::{Alone, Apart};
-use crate::config::{Life, ModelUpdate};
+use crate::config::{Life, ModelUpdate, Redetect};
 use crate::error::Error;
 use crate::estimate::{Diagnostics, Estimate, Event, TrackState};
 use crate::filter::{Bounds, Particle, mean_state, resample, scale_estimate, shift_estimate};
@@ -64,6 +64,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         let stuck = self.cues.miss(&self.config, frame, &look.ellipse, self.state == TrackState::Tracking);
         let was_tracking = self.state == TrackState::Tracking;
         let event = self.life_cycle(look.found && !stuck);
+        self.settled |= self.state == TrackState::Tracking && self.misses == 0;
         self.follow(&look.ellipse, was_tracking);
         let model_updated = self.adapt(scratch, frame, &look, event);
         Ok(Estimate {
@@ -88,7 +89,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         prior: Option<ScalePrior>,
         n: usize,
     ) {
-        let Track { config: cfg, rng, particles, weights, target, state, .. } = self;
+        let Track { config: cfg, rng, particles, weights, target, state, misses, settled, .. } = self;
         let Some(target) = target.as_ref() else { return };
         let (w, h) = (frame.width(), frame.height());
         let bounds = Bounds { width: w as Real, height: h as Real, min_half: cfg.min_half_axis };
@@ -105,13 +106,32 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
                 (p.hx, p.hy) = target.half_axes;
             }
         }
-        if *state == TrackState::Tracking {
+        let (hx, hy) = target.half_axes;
+        // A tracked target missed before any step found it (its motion
+        // unknown), or missed while it moves more than half its size a
+        // frame, may have left the particles' reach.
+        let fast = target.speed > FAST * 2.0 * sqrt(hx * hy);
+        let near =
+            *state == TrackState::Tracking && cfg.redetect != Redetect::Off && *misses > 0 && (!*settled || fast);
+        if *state == TrackState::Tracking && !near {
             return;
         }
         let reseed = (cfg.reseed_fraction * N as Real) as usize;
-        let (hx, hy) = target.half_axes;
-        let spots =
-            if cfg.redetect { redetect(&mut scratch.fgmap, frame, &target.models, (hx, hy)) } else { [None; SPOTS] };
+        let spots = if near {
+            let (cx, cy) = target.centre;
+            let reach = NEAR_REACH * hx.max(hy);
+            redetect(
+                &mut scratch.fgmap,
+                frame,
+                &target.models,
+                (hx, hy),
+                (cx - reach, cy - reach, cx + reach, cy + reach),
+            )
+        } else if cfg.redetect == Redetect::Frame {
+            redetect(&mut scratch.fgmap, frame, &target.models, (hx, hy), (0.0, 0.0, w as Real, h as Real))
+        } else {
+            [None; SPOTS]
+        };
         let found = spots.iter().flatten().count();
         // Spread over the set: copies of one parent tend to sit together.
         let stride = N.checked_div(reseed).unwrap_or(N).max(1);
@@ -122,8 +142,19 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
                 Some((x, y)) => {
                     let s = 0.1 * sqrt(4.0 * hx * hy);
                     let (dx, dy) = (normal_from_bits(rng.next_u64()), normal_from_bits(rng.next_u64()));
-                    Particle { x: x + s * dx, y: y + s * dy, hx, hy, ..Default::default() }
+                    // A target found away from its last place moved there
+                    // over the frames it was missed, and goes on moving.
+                    let (vx, vy) = if near {
+                        let m = *misses as Real;
+                        ((x - target.centre.0) / m, (y - target.centre.1) / m)
+                    } else {
+                        (0.0, 0.0)
+                    };
+                    Particle { x: x + s * dx, y: y + s * dy, vx, vy, hx, hy, ..Default::default() }
                 }
+                // Near the target, only the places: the rest of the set
+                // goes on tracking.
+                None if near => continue,
                 None => uniform_particle(rng, w, h, hx, hy),
             };
         }
@@ -426,6 +457,14 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         updated
     }
 }
+
+/// How far from its last estimate, in its larger half axis, a missed
+/// target is looked for ([`Redetect::Near`]).
+const NEAR_REACH: Real = 4.0;
+
+/// A target moving more than this share of its size a frame is fast
+/// ([`Redetect::Near`]).
+const FAST: Real = 0.5;
 
 /// What observing the particles found.
 #[derive(Copy, Clone, Debug, Default)]

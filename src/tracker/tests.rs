@@ -1,6 +1,6 @@
 use super::*;
 use crate::colour::Binning;
-use crate::config::ModelUpdate;
+use crate::config::{ModelUpdate, Redetect};
 use crate::correlation::CorrelationCue;
 use crate::edges::EdgeCue;
 use crate::frame::PixelFormat;
@@ -392,7 +392,7 @@ fn redetection_finds_the_target_where_its_colours_stand_out() {
     // colours stand out most from their ring is the target's new box,
     // within the map's lattice step and the scan's stride (16 px at
     // this size).
-    let cfg = Config { redetect: true, ..Config::default() };
+    let cfg = Config { redetect: Redetect::Frame, ..Config::default() };
     let mut t: Tracker<20> = Tracker::new(cfg, 1).unwrap();
     t.init(&frame(&scene(None, 0)), BOX).unwrap();
     let mut moved = vec![100u8; W * H * 3];
@@ -406,7 +406,8 @@ fn redetection_finds_the_target_where_its_colours_stand_out() {
         }
     }
     let target = t.track.target.as_ref().unwrap();
-    let spots = redetect(&mut t.scratch.fgmap, &frame(&moved), &target.models, target.half_axes);
+    let whole = (0.0, 0.0, W as Real, H as Real);
+    let spots = redetect(&mut t.scratch.fgmap, &frame(&moved), &target.models, target.half_axes, whole);
     let (x, y) = spots[0].expect("a spot");
     // The target's centre is now (100, 71), 4 px from the frame's bottom.
     assert!((x - 100.0).abs() <= 16.0 && (y - 71.0).abs() <= 16.0, "({x}, {y})");
