@@ -121,7 +121,9 @@ pub struct Config {
     pub lost_after: u16,
     /// While searching or lost, this fraction of particles, in `[0, 1]`, is
     /// re-drawn uniformly over the frame each step, so the search keeps
-    /// exploring instead of settling on the best background match.
+    /// exploring instead of settling on the best background match (with
+    /// [`Redetect::Frame`], half of them at the places found instead). Half
+    /// of it is what [`Redetect::Near`] draws near a missed target.
     pub reseed_fraction: Real,
     /// Smallest half axis a particle may have, in pixels (at least 1).
     pub min_half_axis: Real,

@@ -110,27 +110,25 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         // A tracked target missed before any step found it (its motion
         // unknown), or missed while it moves more than half its size a
         // frame, may have left the particles' reach.
-        let fast = target.speed > FAST * 2.0 * sqrt(hx * hy);
+        // Its speed over `FAST` times its size `2·sqrt(hx·hy)`, squared.
+        let fast = target.speed * target.speed > 4.0 * FAST * FAST * hx * hy;
         let near =
             *state == TrackState::Tracking && cfg.redetect != Redetect::Off && *misses > 0 && (!*settled || fast);
         if *state == TrackState::Tracking && !near {
             return;
         }
         let reseed = (cfg.reseed_fraction * N as Real) as usize;
-        let spots = if near {
+        // Where to look: one call, so that the scan is built once.
+        let area = if near {
             let (cx, cy) = target.centre;
             let reach = NEAR_REACH * hx.max(hy);
-            redetect(
-                &mut scratch.fgmap,
-                frame,
-                &target.models,
-                (hx, hy),
-                (cx - reach, cy - reach, cx + reach, cy + reach),
-            )
-        } else if cfg.redetect == Redetect::Frame {
-            redetect(&mut scratch.fgmap, frame, &target.models, (hx, hy), (0.0, 0.0, w as Real, h as Real))
+            Some((cx - reach, cy - reach, cx + reach, cy + reach))
         } else {
-            [None; SPOTS]
+            (cfg.redetect == Redetect::Frame).then_some((0.0, 0.0, w as Real, h as Real))
+        };
+        let spots = match area {
+            Some(area) => redetect(&mut scratch.fgmap, frame, &target.models, (hx, hy), area),
+            None => [None; SPOTS],
         };
         let found = spots.iter().flatten().count();
         // Spread over the set: copies of one parent tend to sit together.
