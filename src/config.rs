@@ -26,8 +26,8 @@ pub enum Redetect {
     /// may have left the particles' reach. A share of the particles
     /// ([`Config::reseed_fraction`], halved) is drawn at the best places
     /// within four half axes of its last estimate, with the velocity that
-    /// took it there. On the real sequences it does not act (their tracks
-    /// are the same as with `Off`); on a target moving most of its size a
+    /// took it there. On the real sequences it hardly acts (their accuracy
+    /// is the same as with `Off`); on a target moving most of its size a
     /// frame it keeps it (docs/accuracy.md).
     #[default]
     Near,
