@@ -306,9 +306,7 @@ fn layout(story: Story, t: usize, n: usize, (w, h): (usize, usize)) -> Layout {
         Story::SmallFast => {
             // A triangle wave between x = 10 and 118 at 10 px a frame, and a
             // vertical swing of ±24 px.
-            let (lo, hi, speed) = (10.0, 118.0, 10.0);
-            let phase = (speed * tf) % (2.0 * (hi - lo));
-            let cx = if phase < hi - lo { lo + phase } else { hi - (phase - (hi - lo)) };
+            let cx = zigzag(tf, 10.0, 118.0, 10.0);
             Layout { cx, cy: 48.0 + 24.0 * (2.0 * PI * tf / 17.0).sin(), a: 6.0, b: 6.0, ..base }
         }
         Story::Rotate => {
@@ -337,9 +335,7 @@ fn layout(story: Story, t: usize, n: usize, (w, h): (usize, usize)) -> Layout {
         Story::Fast => {
             // A triangle wave between x = 22 and 106 at 18 px a frame (the
             // target is 22 px wide), and a vertical swing of ±20 px.
-            let (lo, hi, speed) = (22.0, 106.0, 18.0);
-            let phase = (speed * tf) % (2.0 * (hi - lo));
-            let cx = if phase < hi - lo { lo + phase } else { hi - (phase - (hi - lo)) };
+            let cx = zigzag(tf, 22.0, 106.0, 18.0);
             Layout { cx, cy: 48.0 + 20.0 * (2.0 * PI * tf / 14.0).sin(), ..base }
         }
         Story::Crossing => {
@@ -441,6 +437,19 @@ fn layout(story: Story, t: usize, n: usize, (w, h): (usize, usize)) -> Layout {
     }
 }
 
+/// Where a triangle wave between `lo` and `hi` at `speed` a frame is at
+/// frame `tf`, starting at `lo`.
+fn zigzag(tf: f64, lo: f64, hi: f64, speed: f64) -> f64 {
+    let phase = (speed * tf) % (2.0 * (hi - lo));
+    if phase < hi - lo { lo + phase } else { hi - (phase - (hi - lo)) }
+}
+
+/// Which of a blob's five bands across (half axis `b`) the offset `u` from
+/// its centre falls in: the bands move and scale with the blob.
+fn band(u: f64, b: f64) -> i64 {
+    ((u + b) / (2.0 * b / 5.0)).floor() as i64
+}
+
 /// Whether `(dx, dy)` from a blob's centre is inside its wobbling outline.
 fn in_blob(dx: f64, dy: f64, a: f64, b: f64, t: usize) -> bool {
     let r2 = (dx / a).powi(2) + (dy / b).powi(2);
@@ -456,10 +465,9 @@ fn in_blob(dx: f64, dy: f64, a: f64, b: f64, t: usize) -> bool {
 /// The colour at `(dx, dy)` from the centre of a blob in the target's
 /// colours, textured with `pattern`.
 fn blob_colour(dx: f64, dy: f64, b: f64, pattern: Pattern) -> [f64; 3] {
-    let band = |u: f64| ((u + b) / (2.0 * b / 5.0)).floor() as i64;
     let stripe = match pattern {
         Pattern::Stripes { horizontal } => return kind_colour(dx, dy, b, horizontal, 0),
-        Pattern::Checker => band(dx) + band(dy),
+        Pattern::Checker => band(dx, b) + band(dy, b),
         // Rings as wide as the stripes, the middle one of the body colour.
         Pattern::Rings => ((dx * dx + dy * dy).sqrt() / (2.0 * b / 5.0) + 0.5).floor() as i64,
     };
@@ -481,9 +489,7 @@ fn turned_box(a: f64, b: f64, angle: f64) -> (f64, f64) {
 
 /// [`blob_colour`] in the colours of [`KINDS`]`[kind]`.
 fn kind_colour(dx: f64, dy: f64, b: f64, horizontal: bool, kind: usize) -> [f64; 3] {
-    // Three stripes per axis, fixed to the blob so they move and scale with it.
-    let u = if horizontal { dy } else { dx };
-    let band = ((u + b) / (2.0 * b / 5.0)).floor() as i64;
+    let band = band(if horizontal { dy } else { dx }, b);
     let [body, stripe] = KINDS[kind];
     if band.rem_euclid(2) == 1 { stripe } else { body }
 }

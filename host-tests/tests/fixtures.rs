@@ -430,10 +430,11 @@ fn follows_a_target_that_moves_most_of_its_width_a_frame() {
     }
 }
 
-/// Frames after the first on which the tracker reported anything but
-/// tracking.
-fn not_tracking(est: &[Estimate]) -> usize {
-    est.iter().filter(|e| e.state != TrackState::Tracking).count()
+/// For a tracker with `cfg`: the mean IoU over the frames after the first,
+/// and how many of them it reported anything but tracking.
+fn held(fx: &Fixture, cfg: Config, seed: u64) -> (f64, usize) {
+    let (est, _) = run_with(fx, cfg, seed);
+    (mean_ious(fx, &est).0, est.iter().filter(|e| e.state != TrackState::Tracking).count())
 }
 
 #[test]
@@ -447,10 +448,9 @@ fn follows_a_target_while_the_view_pans() {
     // target for background.
     let fx = load("pan");
     for seed in SEEDS {
-        let (est, _) = run(&fx, seed);
-        let (got, _) = mean_ious(&fx, &est);
+        let (got, not_tracking) = held(&fx, Config::default(), seed);
         assert!(got >= 0.6, "seed {seed}: mean IoU {got:.2}");
-        assert_eq!(not_tracking(&est), 0, "seed {seed}: reported not tracking");
+        assert_eq!(not_tracking, 0, "seed {seed}: reported not tracking");
     }
 }
 
@@ -469,14 +469,12 @@ fn keeps_a_small_target_that_moves_most_of_its_size_a_frame() {
     let fx = load("small_fast");
     let off = Config { redetect: Redetect::Off, ..Config::default() };
     for seed in 1..=16 {
-        let (est, _) = run(&fx, seed);
-        let (got, _) = mean_ious(&fx, &est);
+        let (got, not_tracking) = held(&fx, Config::default(), seed);
         assert!(got >= 0.5, "seed {seed}: mean IoU {got:.2}");
-        assert_eq!(not_tracking(&est), 0, "seed {seed}: reported not tracking");
-        let (est, _) = run_with(&fx, off, seed);
-        let (without, _) = mean_ious(&fx, &est);
+        assert_eq!(not_tracking, 0, "seed {seed}: reported not tracking");
+        let (without, not_tracking) = held(&fx, off, seed);
         assert!(
-            without < 0.5 || not_tracking(&est) > 0,
+            without < 0.5 || not_tracking > 0,
             "seed {seed}: without re-detection, mean IoU {without:.2} and always tracking"
         );
     }
@@ -491,10 +489,9 @@ fn follows_a_target_that_turns_half_a_turn() {
     // 0.67), and no frame may be reported lost.
     let fx = load("rotate");
     for seed in SEEDS {
-        let (est, _) = run(&fx, seed);
-        let (got, _) = mean_ious(&fx, &est);
+        let (got, not_tracking) = held(&fx, Config::default(), seed);
         assert!(got >= 0.6, "seed {seed}: mean IoU {got:.2}");
-        assert_eq!(not_tracking(&est), 0, "seed {seed}: reported not tracking");
+        assert_eq!(not_tracking, 0, "seed {seed}: reported not tracking");
     }
 }
 
@@ -513,11 +510,9 @@ fn stays_on_a_target_among_look_alikes() {
     let colour_alone = Config { edges: None, correlation: None, ..Config::default() };
     let mut lost_by_colour = 0;
     for seed in 1..=16 {
-        let (est, _) = run(&fx, seed);
-        let off = est.iter().zip(&fx.frames[1..]).position(|(e, f)| !on_target(e, &f.truth));
-        assert_eq!(off, None, "seed {seed}: off the target from frame {:?}", off.map(|i| i + 1));
-        let (est, _) = run_with(&fx, colour_alone, seed);
-        lost_by_colour += usize::from(est.iter().zip(&fx.frames[1..]).any(|(e, f)| !on_target(e, &f.truth)));
+        let on = share_on_target(&fx, Config::default(), seed);
+        assert_eq!(on, 1.0, "seed {seed}: on the target on {on:.2} of frames");
+        lost_by_colour += usize::from(share_on_target(&fx, colour_alone, seed) < 1.0);
     }
     assert!(lost_by_colour > 0, "the colour histogram alone stays on the target on every seed");
 }
