@@ -2,7 +2,7 @@
 
 use crate::boundary::BoundaryCue;
 use crate::colour::Binning;
-use crate::correlation::CorrelationCue;
+use crate::correlation::{CorrelationCue, GradientCue};
 use crate::edges::EdgeCue;
 use crate::error::{ConfigError, ParamProblem, check, positive};
 use crate::filter::{Dynamics, Resampling};
@@ -176,6 +176,10 @@ pub struct Config {
     /// one), or `None`. [`CorrelationCue::MEASURED`] by default where the
     /// feature is built, `None` where it is not.
     pub correlation: Option<CorrelationCue>,
+    /// A correlation filter on gradient channels over a wide window (see
+    /// [`GradientCue`]; built with the `gradient` feature), or `None`, the
+    /// default.
+    pub gradient: Option<GradientCue>,
 }
 
 /// What drives the life cycle: when a tracked target counts as missed (and,
@@ -366,6 +370,7 @@ impl Default for Config {
             background_weight: Some(BackgroundWeight { strength: 0.5, above: 0.8 }),
             template: None,
             correlation: crate::correlation::DEFAULT,
+            gradient: crate::correlation::GRADIENT_DEFAULT,
         }
     }
 }
@@ -442,6 +447,7 @@ impl Config {
         check("dynamics.scale_rate_noise", d.scale_rate_noise, 0.0, 0.1)?;
         crate::motion::validate(self.scene_motion)?;
         crate::correlation::validate(self.correlation)?;
+        crate::correlation::validate_gradient(self.gradient)?;
         crate::histogram::validate_quadrants(self.quadrants)?;
         crate::bins::validate(self.binning)?;
         check("alpha", self.alpha, 0.0, 1.0)?;

@@ -26,6 +26,21 @@ pub(crate) trait Cue {
     /// is `None` when the cue is off.
     fn start(&mut self, settings: Option<&Self::Settings>, frame: &Frame<'_>, e: &Ellipse);
 
+    /// Mixes the cue's own score of each of the first `n` particles into
+    /// its similarity in `similarities` (before the similarities are
+    /// weighed), for a target of half axes `half_axes`.
+    #[allow(unused_variables)]
+    fn rescore<const N: usize>(
+        &mut self,
+        settings: &Self::Settings,
+        frame: &Frame<'_>,
+        particles: &[Particle; N],
+        similarities: &mut [Real; N],
+        n: usize,
+        half_axes: (Real, Real),
+    ) {
+    }
+
     /// Looks at the frame around the filter's mean state before the size
     /// and position searches, and may move the estimate and its particles
     /// with it (`search` false: the size is decided elsewhere this frame).
@@ -57,11 +72,11 @@ pub(crate) trait Cue {
 /// A cue this build leaves out: it takes no memory and does nothing (its
 /// settings never pass validation, see [`not_built`]).
 // Unused in a build with every such cue.
-#[cfg_attr(all(feature = "correlation", feature = "scene-motion"), allow(dead_code))]
+#[cfg_attr(all(feature = "correlation", feature = "gradient", feature = "scene-motion"), allow(dead_code))]
 #[derive(Copy, Clone, Debug)]
 pub(crate) struct Absent<S>(PhantomData<S>);
 
-#[cfg_attr(all(feature = "correlation", feature = "scene-motion"), allow(dead_code))]
+#[cfg_attr(all(feature = "correlation", feature = "gradient", feature = "scene-motion"), allow(dead_code))]
 impl<S> Absent<S> {
     /// The stand-in.
     pub(crate) const fn new() -> Self {

@@ -95,7 +95,7 @@ pub mod tracker;
 pub use boundary::BoundaryCue;
 pub use colour::Binning;
 pub use config::{Config, Life, ModelUpdate, Redetect, ShiftSearch, SizeSearch, TableMode, TemplateCue};
-pub use correlation::CorrelationCue;
+pub use correlation::{CorrelationCue, GradientCue};
 pub use edges::{EDGE_SUPPORT_WORDS, EdgeCue, EdgeMap, EdgeParams, MAX_EDGE_BINS};
 pub use error::{ChromaPlane, ConfigError, Error, FrameError, ParamProblem, RegionError};
 pub use estimate::{Diagnostics, Estimate, Event, Trace, TrackState};

@@ -110,6 +110,11 @@ pub const KEYS: &[Key] = &[
         correlation,
     ),
     key(
+        "gradient",
+        "off | on | RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND (correlation filter on gradient channels over a wide window; on = 0.2:0.7:4:0.7:0.03:0.3:3:0.3)",
+        gradient,
+    ),
+    key(
         "background_weight",
         "STRENGTH[:ABOVE] | off (colour model weighted against the surroundings; 1 is CBWH)",
         background_weight,
@@ -338,6 +343,29 @@ fn life(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
     Ok(())
 }
 
+fn gradient(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    c.gradient = match v.split(':').collect::<Vec<_>>().as_slice() {
+        ["off"] => None,
+        ["on"] => Some(pftrack::GradientCue::MEASURED),
+        [rate, above, every, pull, step, scale_pull, psr, blend] => Some(pftrack::GradientCue {
+            rate: num(key, rate)?,
+            learn_above: num(key, above)?,
+            learn_every: every.parse().map_err(|_| format!("{key}: `{every}`: LEARN_EVERY is a count from 1 to 255"))?,
+            pull: num(key, pull)?,
+            scale_step: num(key, step)?,
+            scale_pull: num(key, scale_pull)?,
+            min_psr: num(key, psr)?,
+            blend: num(key, blend)?,
+        }),
+        _ => {
+            return Err(format!(
+                "{key}: `{v}`: expected off, on or RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND"
+            ));
+        }
+    };
+    Ok(())
+}
+
 fn correlation(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
     c.correlation = match v.split(':').collect::<Vec<_>>().as_slice() {
         ["off"] => None,
@@ -409,6 +437,7 @@ mod tests {
                 "redetect" => "frame",
                 "scene_motion" => "off",
                 "correlation" => "off",
+                "gradient" => "on",
                 "background_weight" => "1",
                 "template" => "0.3:0.05",
                 _ => "0.07",

@@ -114,7 +114,7 @@ const fn peak() -> [Real; GRID] {
 
 /// `sin(a)` for `a ≥ 0`, at compile time only: folded onto `[0, π/2]`,
 /// where eleven terms of the Taylor series are accurate to about 1e-12.
-const fn sin(a: f64) -> f64 {
+pub(super) const fn sin(a: f64) -> f64 {
     use core::f64::consts::{FRAC_PI_2, PI, TAU};
     let mut a = a;
     while a >= TAU {
@@ -136,7 +136,7 @@ const fn sin(a: f64) -> f64 {
 
 /// `exp(x)` for `0 ≤ x ≤ 64`, at compile time only: `exp(x / 64)` by
 /// its series (twelve terms for an argument at most 1), squared six times.
-const fn exp(x: f64) -> f64 {
+pub(super) const fn exp(x: f64) -> f64 {
     let y = x / 64.0;
     let (mut term, mut sum, mut k) = (1.0, 1.0, 1);
     while k < 12 {
@@ -511,7 +511,7 @@ fn transform_columns(work: &mut Spectrum, fft: fn(&mut [Complex32; GRID]) -> &mu
 }
 
 /// `ln(1 + l)`, from the table.
-fn log_luma(l: u8) -> Real {
+pub(super) fn log_luma(l: u8) -> Real {
     LOG_LUMA.get(l as usize).copied().unwrap_or(0.0)
 }
 

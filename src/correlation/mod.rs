@@ -1,9 +1,15 @@
-//! The correlation filter beside colour: its settings, their validation
-//! and default, and the cue the tracker keeps ([`filter`] where the
-//! `correlation` feature builds it, a stand-in that does nothing where not).
+//! The correlation filters beside colour: their settings, their validation
+//! and defaults, and the cues the tracker keeps: [`filter`] on grey levels
+//! where the `correlation` feature builds it, [`gradient`] on gradient
+//! channels over a wide window where the `gradient` feature does, and
+//! stand-ins that do nothing where not.
 
+#[cfg(feature = "gradient")]
+mod channels;
 #[cfg(feature = "correlation")]
 mod filter;
+#[cfg(feature = "gradient")]
+mod gradient;
 
 #[cfg(not(feature = "correlation"))]
 use crate::cue::Absent;
@@ -13,6 +19,13 @@ use crate::scalar::Real;
 
 #[cfg(feature = "correlation")]
 pub(crate) use filter::CorrelationFilter as Correlation;
+
+#[cfg(feature = "gradient")]
+pub(crate) use gradient::GradientFilter as Gradient;
+
+/// The cue in a build without the `gradient` feature.
+#[cfg(not(feature = "gradient"))]
+pub(crate) type Gradient = Absent<GradientCue>;
 
 /// The cue in a build without the `correlation` feature.
 #[cfg(not(feature = "correlation"))]
@@ -120,5 +133,105 @@ impl CorrelationCue {
         scale_step: 0.03,
         scale_pull: 0.3,
         min_psr: 3.0,
+    };
+}
+
+/// The gradient filter's default: off (the grey-level filter is the
+/// default's texture cue; see [`GradientCue`] for what it costs).
+pub(crate) const GRADIENT_DEFAULT: Option<GradientCue> = None;
+
+/// Checks the gradient filter's settings; asking for it in a build without
+/// it is an error that names the feature.
+// Inlined into `Config::validate`, the one caller, as its other checks are.
+#[inline(always)]
+pub(crate) fn validate_gradient(settings: Option<GradientCue>) -> Result<(), ConfigError> {
+    let Some(c) = settings else { return Ok(()) };
+    if !cfg!(feature = "gradient") {
+        return Err(not_built("gradient", "gradient"));
+    }
+    positive("gradient.rate", c.rate, 1.0)?;
+    check("gradient.learn_above", c.learn_above, 0.0, 1.0)?;
+    if c.learn_every == 0 {
+        return Err(ConfigError { field: "gradient.learn_every", problem: crate::error::ParamProblem::OutOfRange });
+    }
+    check("gradient.pull", c.pull, 0.0, 1.0)?;
+    check("gradient.scale_step", c.scale_step, 0.0, 0.2)?;
+    check("gradient.scale_pull", c.scale_pull, 0.0, 1.0)?;
+    check("gradient.min_psr", c.min_psr, 0.0, 20.0)?;
+    check("gradient.blend", c.blend, 0.0, 1.0)
+}
+
+/// A correlation filter on gradient channels over a wide window (the
+/// `gradient` feature): grey and four gradient orientations on cells about
+/// a thirteenth of the box, learnt jointly over a window 2.5 times the box
+/// with the filter cut to the box's support (CSR-DCF's learning, Lukežič et
+/// al. 2017), read in space over a window 3.75 times the box. Each frame,
+/// its response at each particle joins the particle's similarity
+/// (`blend`), and, when its peak is clear, the estimate moves `pull` of the
+/// way to the peak and its size towards the best of three scales, as the
+/// grey-level filter's do ([`CorrelationCue`]). It is the cue that places
+/// a target by the layout of its edges where its colours are its
+/// surroundings' too.
+///
+/// Memory and time: about 15 KB of RAM in every tracker built with the
+/// feature (the read window's cells and the filter) and more stack on the
+/// frames it learns (audit/budgets.txt, docs/performance.md). Off in
+/// [`Config::default`](crate::Config::default); it is meant to replace the
+/// grey-level filter (`correlation: None`), though both may run.
+///
+/// ```
+/// use pftrack::{Config, ConfigError, Error, GradientCue, ParamProblem, Tracker};
+///
+/// let config = Config { gradient: Some(GradientCue::MEASURED), correlation: None, ..Config::default() };
+/// match Tracker::<100>::new(config, 1) {
+///     Ok(tracker) => assert_eq!(tracker.config().gradient, Some(GradientCue::MEASURED)),
+///     // A build without the `gradient` feature names it.
+///     Err(e) => assert_eq!(
+///         e,
+///         Error::Config(ConfigError { field: "gradient", problem: ParamProblem::NotBuilt { feature: "gradient" } })
+///     ),
+/// }
+/// ```
+#[derive(Copy, Clone, Debug, PartialEq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct GradientCue {
+    /// Learning rate `η` of the filter's running mean on each frame it
+    /// learns, in `(0, 1]`.
+    pub rate: Real,
+    /// Frames whose confidence exceeds this, in `[0, 1]`, teach the filter.
+    pub learn_above: Real,
+    /// The filter learns on every `learn_every`-th such frame (at least 1):
+    /// learning transforms the window, reading does not.
+    pub learn_every: u8,
+    /// The share of the way to the response's peak the estimate moves, in
+    /// `[0, 1]`.
+    pub pull: Real,
+    /// Relative size step of the scale search, in `[0, 0.2]` (0: none).
+    pub scale_step: Real,
+    /// The share of the way to the best scale the size moves, in `[0, 1]`.
+    pub scale_pull: Real,
+    /// The peak-to-sidelobe ratio below which the filter moves neither the
+    /// estimate nor its size, in `[0, 20]`.
+    pub min_psr: Real,
+    /// The response's share of each particle's similarity, in `[0, 1]`.
+    pub blend: Real,
+}
+
+impl GradientCue {
+    /// The settings measured on the real sequences (docs/accuracy.md):
+    /// learnt at 0.2 on every fourth frame whose confidence exceeds 0.7
+    /// (a running mean as slow as 0.05 on every frame), a move 0.7 of the
+    /// way to the peak and a size 0.3 of the way to the best of three
+    /// scales 3% apart when the PSR reaches 3, and a 0.3 share of each
+    /// particle's similarity.
+    pub const MEASURED: GradientCue = GradientCue {
+        rate: 0.2,
+        learn_above: 0.7,
+        learn_every: 4,
+        pull: 0.7,
+        scale_step: 0.03,
+        scale_pull: 0.3,
+        min_psr: 3.0,
+        blend: 0.3,
     };
 }

@@ -29,6 +29,21 @@ macro_rules! cues {
                 $(Cue::start(&mut self.$name, ($settings)(cfg).as_ref(), frame, e);)*
             }
 
+            /// [`Cue::rescore`] of every cue that is on.
+            pub(super) fn rescore<const N: usize>(
+                &mut self,
+                cfg: &Config,
+                frame: &Frame<'_>,
+                particles: &[Particle; N],
+                similarities: &mut [Real; N],
+                n: usize,
+                half_axes: (Real, Real),
+            ) {
+                $(if let Some(s) = ($settings)(cfg) {
+                    Cue::rescore(&mut self.$name, &s, frame, particles, similarities, n, half_axes);
+                })*
+            }
+
             /// [`Cue::place`] of every cue that is on; the last response's
             /// peak-to-sidelobe ratio, or 0.
             pub(super) fn place<const N: usize>(
@@ -69,5 +84,6 @@ macro_rules! cues {
 
 cues! {
     correlation: crate::correlation::Correlation = |c: &Config| c.correlation;
+    gradient: crate::correlation::Gradient = |c: &Config| c.gradient;
     motion: crate::motion::SceneMotion = |c: &Config| crate::motion::settings(c.scene_motion);
 }

@@ -55,6 +55,10 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         let n = self.hypotheses(&apart);
         self.predict(scratch, frame, prior, n);
         let observed = self.observe(scratch, frame, apart, n);
+        if let Some(t) = self.target.as_ref() {
+            let half_axes = t.half_axes;
+            self.cues.rescore(&self.config, frame, &self.particles, &mut self.weights, n, half_axes);
+        }
         let sigma = self.weigh(observed.d2_max, n);
         // An external size measurement, or the table's fixed size, decides
         // the size: no search then.

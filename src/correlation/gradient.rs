@@ -1,0 +1,724 @@
+//! A correlation filter on gradient channels over a wide window: grey and
+//! [`ORIENTATIONS`] gradient orientations ([`super::channels`]) on cells
+//! about a thirteenth of the box, learnt jointly over a window 2.5 times the
+//! box and read over one [`READ`] cells across (3.75 times the box).
+//!
+//! Learning is CSR-DCF's (Lukežič et al. 2017): each learning frame the
+//! channels' joint closed-form filter `H_k = G X_k* / (Σ_j |X_j|² + λ)` is
+//! solved in the Fourier domain on [`LEARN`] x [`LEARN`] cells (each channel
+//! centred, tapered by a Hann window; grey scaled to unit energy and the
+//! orientations together to unit energy), turned back into space, **cut to
+//! the box's support** ([`SUPPORT`] x [`SUPPORT`] cells) and kept as a
+//! running mean of such cut filters. Cutting is what lets the window be
+//! wide: the filter learns the target against its surroundings without
+//! answering to them (the boundary effects BACF and CSR-DCF remove).
+//!
+//! Reading is in space, where the cut filter is small: the response at a
+//! shift is the sum over channels and support cells of the filter times the
+//! window's cells (normalised as learnt, over the whole read window). It is
+//! evaluated where it is needed: on a coarse grid of shifts every
+//! [`COARSE`] cells and about its best one, for the peak and its
+//! peak-to-sidelobe ratio, and at each particle, whose similarity it joins
+//! ([`GradientCue::blend`]). No response FFT runs, and only the learning
+//! frames transform (every [`GradientCue::learn_every`]-th confident frame).
+//!
+//! Memory: the read window's cells as bytes ([`MAX_CELLS`]² x
+//! [`CHANNELS`]) and the filter ([`SUPPORT`]² x [`CHANNELS`] `f32`) live in
+//! the tracker; a learning frame's spectrum and energy sum live on the
+//! stack while it learns (audit/budgets.txt).
+
+use super::GradientCue;
+use super::channels::{self, CHANNELS, MAX_CELLS, ORIENTATIONS};
+use super::filter::{exp, log_luma, sin};
+use crate::cue::Cue;
+use crate::filter::{Particle, scale_estimate, shift_estimate};
+use crate::frame::Frame;
+use crate::geometry::Ellipse;
+use crate::scalar::{Real, sqrt};
+use microfft::Complex32;
+
+/// The learning lattice, in cells per side (a power of two, for the FFT).
+pub const LEARN: usize = 32;
+/// The read lattice, in cells per side.
+pub const READ: usize = MAX_CELLS;
+/// The filter's side, in cells: the box's support in the learning window.
+pub const SUPPORT: usize = 13;
+/// The support's half side.
+const HALF: usize = SUPPORT / 2;
+/// The learning window's side as a multiple of the box's: the box is
+/// `LEARN / WINDOW`, about 13 cells, across.
+const WINDOW: Real = 2.5;
+/// The regulariser `λ` of the joint solve. The channels have unit energy
+/// (grey, and the orientations together), so a bin of `Σ |X|²` averages
+/// about 2 by Parseval; λ = 0.1 keeps weak frequencies from dominating.
+const LAMBDA: Real = 0.1;
+/// The coarse search's step, in cells.
+const COARSE: i32 = 2;
+/// The σ of the Gaussian peak the filter is trained to answer with, in cells.
+const PEAK_SIGMA: f64 = 1.0;
+/// The half spectrum's columns: 0 to `LEARN / 2`.
+const COLS: usize = LEARN / 2 + 1;
+
+/// Half a spectrum of the learning lattice.
+type Spectrum = [[Complex32; COLS]; LEARN];
+/// The filter in space, per channel, row by row.
+type Template = [[[Real; SUPPORT]; SUPPORT]; CHANNELS];
+
+/// The Hann taper `sin²(π (i + ½) / LEARN)`, computed at compile time.
+const TAPER: [Real; LEARN] = taper();
+
+// Evaluated at compile time only (for a `const`): an index out of range
+// would stop the build, never the device.
+#[allow(clippy::indexing_slicing)]
+const fn taper() -> [Real; LEARN] {
+    let mut out = [0.0; LEARN];
+    let mut i = 0;
+    while i < LEARN {
+        let s = sin(core::f64::consts::PI * (i as f64 + 0.5) / LEARN as f64);
+        out[i] = (s * s) as Real;
+        i += 1;
+    }
+    out
+}
+
+/// The weight of a shift in the read window: the Hann taper of a window
+/// twice the learning window's side (`2 · LEARN` cells, 5 times the box) at
+/// the shift's cell, `sin²(π (LEARN + s + ½) / (2 · LEARN))` for a shift of
+/// `s` cells, indexed by `s + READ / 2`. A response far from the window's
+/// centre counts for less: the target moves little between frames, and a
+/// look-alike at the window's edge is more likely than the target there
+/// (the cosine window Siamese trackers put on their responses).
+const SHIFT_WEIGHT: [Real; READ] = shift_weight();
+
+// Evaluated at compile time only (for a `const`): an index out of range
+// would stop the build, never the device.
+#[allow(clippy::indexing_slicing)]
+const fn shift_weight() -> [Real; READ] {
+    let mut out = [0.0; READ];
+    let mut i = 0;
+    while i < READ {
+        let cell = (LEARN + i) as f64 - (READ / 2) as f64;
+        let s = sin(core::f64::consts::PI * (cell + 0.5) / (2 * LEARN) as f64);
+        out[i] = (s * s) as Real;
+        i += 1;
+    }
+    out
+}
+
+/// The spectrum of the Gaussian peak at lattice point 0 (wrapped) along one
+/// axis (real and even, so real; the 2-D one is `PEAK[u] · PEAK[v]`).
+const PEAK: [Real; LEARN] = peak();
+
+// Evaluated at compile time only (for a `const`): an index out of range
+// would stop the build, never the device.
+#[allow(clippy::indexing_slicing)]
+const fn peak() -> [Real; LEARN] {
+    let mut out = [0.0; LEARN];
+    let mut u = 0;
+    while u < LEARN {
+        let mut sum = 0.0;
+        let mut k = 0;
+        while k < LEARN {
+            let d = if k < LEARN - k { k } else { LEARN - k } as f64;
+            let g = 1.0 / exp(d * d / (2.0 * PEAK_SIGMA * PEAK_SIGMA));
+            let turn = ((u * k) % LEARN) as f64 / LEARN as f64;
+            sum += g * sin(core::f64::consts::TAU * turn + core::f64::consts::FRAC_PI_2);
+            k += 1;
+        }
+        out[u] = sum as Real;
+        u += 1;
+    }
+    out
+}
+
+/// How a window's cells are normalised: channel `k`'s value `v` counts as
+/// `gain[k] · (v − mean[k])` (grey as `ln(1 + luma)`).
+#[derive(Copy, Clone, Debug, Default)]
+struct Norm {
+    gain: [Real; CHANNELS],
+    mean: [Real; CHANNELS],
+}
+
+/// What this frame's window showed: where it was, and where its response
+/// peaks.
+#[derive(Copy, Clone, Debug)]
+struct Seen {
+    centre: (Real, Real),
+    /// Cell side, pixels (horizontal, vertical).
+    cell: (Real, Real),
+    norm: Norm,
+    /// The response's peak, the peak's offset from `centre` in pixels, and
+    /// the peak-to-sidelobe ratio over the coarse grid.
+    peak: Real,
+    at: (Real, Real),
+    psr: Real,
+}
+
+/// The gradient filter: the running mean of cut filters, and the working
+/// memory for one window's cells.
+#[derive(Clone, Debug)]
+pub(crate) struct GradientFilter {
+    template: Template,
+    /// `Σ` of each channel's template (for the means' share of a response).
+    sums: [Real; CHANNELS],
+    /// Whether `template` holds a learnt filter.
+    learned: bool,
+    /// Confident frames seen since the last one learnt.
+    waiting: u16,
+    /// The read window's cells ([`channels::read`]'s layout); the learning
+    /// window's while one is learnt.
+    cells: [u8; CHANNELS * READ * READ],
+    /// This frame's window, from [`Cue::rescore`].
+    seen: Option<Seen>,
+}
+
+/// Cell side for a box of half axes `(hx, hy)`, pixels.
+fn cell_size((hx, hy): (Real, Real)) -> (Real, Real) {
+    (2.0 * hx * WINDOW / LEARN as Real, 2.0 * hy * WINDOW / LEARN as Real)
+}
+
+/// A channel's value at a cell, as a number (grey as `ln(1 + luma)`).
+#[inline(always)]
+fn value(k: usize, v: u8) -> Real {
+    if k == 0 { log_luma(v) } else { v as Real }
+}
+
+/// Rounds to the nearest integer (halves away from zero).
+fn round(v: Real) -> i32 {
+    if v >= 0.0 { (v + 0.5) as i32 } else { -((0.5 - v) as i32) }
+}
+
+/// The offset, in `(−½, ½)` cells, of the vertex of the parabola through a
+/// peak and its two neighbours; 0 where they are flat.
+fn sub_cell(left: Real, peak: Real, right: Real) -> Real {
+    let curvature = left - 2.0 * peak + right;
+    if curvature < 0.0 { crate::scalar::clamp(0.5 * (left - right) / curvature, -0.5, 0.5) } else { 0.0 }
+}
+
+impl GradientFilter {
+    /// An empty filter (it answers nothing until it has learnt a window).
+    pub(crate) const fn new() -> Self {
+        GradientFilter {
+            template: [[[0.0; SUPPORT]; SUPPORT]; CHANNELS],
+            sums: [0.0; CHANNELS],
+            learned: false,
+            waiting: 0,
+            cells: [0; CHANNELS * READ * READ],
+            seen: None,
+        }
+    }
+
+    /// The filter's response to the `n` x `n` cells `cells`, normalised by
+    /// `norm`, with its support's top-left cell at `(top, left)`; `None`
+    /// where the support leaves the cells.
+    fn response(&self, cells: &[u8], n: usize, norm: &Norm, top: i32, left: i32) -> Option<Real> {
+        if top < 0 || left < 0 || top as usize + SUPPORT > n || left as usize + SUPPORT > n {
+            return None;
+        }
+        let (top, left) = (top as usize, left as usize);
+        let mut out = 0.0;
+        for (k, (template, &sum)) in self.template.iter().zip(self.sums.iter()).enumerate() {
+            let plane = cells.get(k * n * n..(k + 1) * n * n)?;
+            let mut s = 0.0;
+            for (r, weights) in template.iter().enumerate() {
+                let start = (top + r) * n + left;
+                let row = plane.get(start..start + SUPPORT)?;
+                for (&w, &v) in weights.iter().zip(row.iter()) {
+                    s += w * value(k, v);
+                }
+            }
+            let (gain, mean) = (norm.gain.get(k).copied()?, norm.mean.get(k).copied()?);
+            out += gain * (s - mean * sum);
+        }
+        Some(out)
+    }
+
+    /// The response in the read window at a shift of `(sr, sc)` cells from
+    /// its centre.
+    fn at_shift(&self, norm: &Norm, sr: i32, sc: i32) -> Option<Real> {
+        let origin = (READ / 2 - HALF) as i32;
+        let weight = |s: i32| SHIFT_WEIGHT.get((s + (READ / 2) as i32) as usize).copied().unwrap_or(0.0);
+        Some(self.response(&self.cells, READ, norm, origin + sr, origin + sc)? * weight(sr) * weight(sc))
+    }
+
+    /// Reads the window around `centre` for a box of half axes `half_axes`
+    /// and finds its response's peak; `None` before anything is learnt, or
+    /// for a window of one grey level.
+    fn look(&mut self, frame: &Frame<'_>, centre: (Real, Real), half_axes: (Real, Real)) -> Option<Seen> {
+        if !self.learned {
+            return None;
+        }
+        let cell = cell_size(half_axes);
+        if !channels::read(frame, centre, cell, READ, &mut self.cells) {
+            return None;
+        }
+        let norm = normalise(&self.cells, READ, None)?;
+        // The coarse grid, for the peak's neighbourhood and the sidelobes.
+        let reach = (READ / 2 - HALF) as i32 - 1;
+        let span = reach / COARSE * COARSE;
+        let (mut best, mut at) = (Real::MIN, (0, 0));
+        let (mut s1, mut s2, mut count) = (0.0 as Real, 0.0 as Real, 0u32);
+        let mut sr = -span;
+        while sr <= span {
+            let mut sc = -span;
+            while sc <= span {
+                if let Some(v) = self.at_shift(&norm, sr, sc) {
+                    (s1, s2, count) = (s1 + v, s2 + v * v, count + 1);
+                    if v > best {
+                        (best, at) = (v, (sr, sc));
+                    }
+                }
+                sc += COARSE;
+            }
+            sr += COARSE;
+        }
+        // Then every shift within a coarse step of the best.
+        let (r0, c0) = at;
+        for sr in r0 - (COARSE - 1)..=r0 + (COARSE - 1) {
+            for sc in c0 - (COARSE - 1)..=c0 + (COARSE - 1) {
+                if let Some(v) = self.at_shift(&norm, sr, sc)
+                    && v > best
+                {
+                    (best, at) = (v, (sr, sc));
+                }
+            }
+        }
+        if count == 0 {
+            return None;
+        }
+        let (r, c) = at;
+        let near = |sr, sc| self.at_shift(&norm, sr, sc).unwrap_or(best);
+        let dr = sub_cell(near(r - 1, c), best, near(r + 1, c));
+        let dc = sub_cell(near(r, c - 1), best, near(r, c + 1));
+        let mean = s1 / count as Real;
+        let sd = sqrt((s2 / count as Real - mean * mean).max(0.0));
+        let psr = if sd > 0.0 { (best - mean) / sd } else { 0.0 };
+        Some(Seen {
+            centre,
+            cell,
+            norm,
+            peak: best,
+            at: ((c as Real + dc) * cell.0, (r as Real + dr) * cell.1),
+            psr,
+        })
+    }
+
+    /// The response at zero shift of the window about `e`'s centre with
+    /// cells `scale` times `cell`, normalised by `norm` (the scale search's
+    /// measure: the filter's match at one size against another).
+    fn at_scale(&self, frame: &Frame<'_>, e: &Ellipse, cell: (Real, Real), scale: Real, norm: &Norm) -> Option<Real> {
+        // A lattice one cell wider than the support, so that cell
+        // `n / 2` (which starts at the centre) is the support's middle.
+        const N: usize = SUPPORT + 1;
+        let mut cells = [0u8; CHANNELS * N * N];
+        if !channels::read(frame, (e.cx, e.cy), (cell.0 * scale, cell.1 * scale), N, &mut cells) {
+            return None;
+        }
+        self.response(&cells, N, norm, (N / 2 - HALF) as i32, (N / 2 - HALF) as i32)
+    }
+
+    /// Learns the window around `e` at `rate` (the first window is learnt
+    /// whole, whatever the rate).
+    fn learn(&mut self, frame: &Frame<'_>, e: &Ellipse, rate: Real) {
+        let cell = cell_size((e.hx, e.hy));
+        let Some(cells) = self.cells.get_mut(..CHANNELS * LEARN * LEARN) else { return };
+        if !channels::read(frame, (e.cx, e.cy), cell, LEARN, cells) {
+            return;
+        }
+        let Some(norm) = normalise(cells, LEARN, Some(&TAPER)) else { return };
+        let cells = &*cells;
+        let eta = if self.learned { rate } else { 1.0 };
+        solve(cells, &norm, &mut self.template, eta);
+        for (sum, template) in self.sums.iter_mut().zip(self.template.iter()) {
+            *sum = template.iter().flatten().sum();
+        }
+        self.learned = true;
+        self.waiting = 0;
+    }
+}
+
+/// Each channel's mean and gain over the `n` x `n` cells `cells` (tapered
+/// by `taper` where given, as the learning window is): grey to unit energy,
+/// the orientations together to unit energy. `None` for a window of one
+/// grey level.
+fn normalise(cells: &[u8], n: usize, taper: Option<&[Real; LEARN]>) -> Option<Norm> {
+    let mut norm = Norm::default();
+    let mut energy = [0.0 as Real; CHANNELS];
+    let weight = |i: usize| taper.map_or(1.0, |t| t.get(i / n).copied().unwrap_or(0.0) * t.get(i % n).copied().unwrap_or(0.0));
+    for (k, (mean, e)) in norm.mean.iter_mut().zip(energy.iter_mut()).enumerate() {
+        let plane = cells.get(k * n * n..(k + 1) * n * n)?;
+        *mean = plane.iter().map(|&v| value(k, v)).sum::<Real>() / (n * n) as Real;
+        // A second pass: the sum of squares less the squared sum would
+        // cancel away f32's digits.
+        *e = plane
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| {
+                let d = (value(k, v) - *mean) * weight(i);
+                d * d
+            })
+            .sum();
+    }
+    let [grey, orientations @ ..] = energy;
+    // Per cell: a window of one grey level leaves only f32's rounding of
+    // its mean.
+    let floor = 1e-6 * (n * n) as Real;
+    if !(grey > floor) {
+        return None;
+    }
+    let orientations: Real = orientations.iter().sum();
+    let (g0, g1) = (1.0 / sqrt(grey), if orientations > floor { 1.0 / sqrt(orientations) } else { 0.0 });
+    for (k, gain) in norm.gain.iter_mut().enumerate() {
+        *gain = if k == 0 { g0 } else { g1 };
+    }
+    Some(norm)
+}
+
+/// The channels' joint filter for the learning window `cells`, cut to the
+/// support, blended into `template` at `eta`. Each channel is transformed
+/// twice (once for the energy sum, once for its own solve) rather than all
+/// kept, so that one spectrum is on the stack at a time.
+#[inline(never)]
+fn solve(cells: &[u8], norm: &Norm, template: &mut Template, eta: Real) {
+    let mut energy = [[LAMBDA; COLS]; LEARN];
+    let mut work: Spectrum = [[Complex32::new(0.0, 0.0); COLS]; LEARN];
+    for k in 0..CHANNELS {
+        transform(&mut work, cells, norm, k);
+        for (e, w) in energy.iter_mut().zip(work.iter()) {
+            for (e, x) in e.iter_mut().zip(w.iter()) {
+                *e += x.re * x.re + x.im * x.im;
+            }
+        }
+    }
+    // The support, about the learning window's middle (where the target's
+    // centre is at zero shift): rows and columns `LEARN / 2 ± HALF`.
+    const FIRST: usize = LEARN / 2 - HALF;
+    for (k, template) in template.iter_mut().enumerate() {
+        transform(&mut work, cells, norm, k);
+        for (u, (row, e)) in work.iter_mut().zip(energy.iter()).enumerate() {
+            let pu = PEAK.get(u).copied().unwrap_or(0.0);
+            for (v, (x, &e)) in row.iter_mut().zip(e.iter()).enumerate() {
+                let pv = PEAK.get(v).copied().unwrap_or(0.0);
+                *x = x.conj() * (pu * pv / e);
+            }
+        }
+        // Back along the columns, then the rows the support needs, two at
+        // a time (rows a and b of a real filter have Hermitian spectra:
+        // one inverse FFT of `X_a + i X_b` gives a in the real part and b
+        // in the imaginary part).
+        for c in 0..COLS {
+            let mut col = [Complex32::new(0.0, 0.0); LEARN];
+            for (v, row) in col.iter_mut().zip(work.iter()) {
+                *v = row.get(c).copied().unwrap_or_default();
+            }
+            let col = microfft::inverse::ifft_32(&mut col);
+            for (v, row) in col.iter().zip(work.iter_mut()) {
+                if let Some(slot) = row.get_mut(c) {
+                    *slot = *v;
+                }
+            }
+        }
+        let scale = 1.0 / (LEARN * LEARN) as Real;
+        for pair in (FIRST..FIRST + SUPPORT).step_by(2) {
+            let (a, b) = (work.get(pair).copied(), work.get(pair + 1).copied());
+            let (Some(a), b) = (a, b) else { continue };
+            let b = b.unwrap_or([Complex32::new(0.0, 0.0); COLS]);
+            let mut full = [Complex32::new(0.0, 0.0); LEARN];
+            for (i, v) in full.iter_mut().enumerate() {
+                let bin = i.min(LEARN - i);
+                let (xa, xb) = (a.get(bin).copied().unwrap_or_default(), b.get(bin).copied().unwrap_or_default());
+                let (xa, xb) = if i > LEARN / 2 { (xa.conj(), xb.conj()) } else { (xa, xb) };
+                *v = xa + Complex32::new(-xb.im, xb.re);
+            }
+            let full = microfft::inverse::ifft_32(&mut full);
+            for (half, r) in [pair, pair + 1].into_iter().enumerate() {
+                if !(FIRST..FIRST + SUPPORT).contains(&r) {
+                    continue;
+                }
+                // The filter pairs its cell `LEARN / 2 − b` with the
+                // window's cell at offset `b` from the centre: the
+                // template is the cut filter turned half a turn.
+                let Some(out) = template.get_mut(FIRST + SUPPORT - 1 - r) else { continue };
+                for (j, w) in out.iter_mut().enumerate() {
+                    let Some(x) = full.get(FIRST + SUPPORT - 1 - j) else { continue };
+                    let h = if half == 0 { x.re } else { x.im } * scale;
+                    *w = *w * (1.0 - eta) + h * eta;
+                }
+            }
+        }
+    }
+}
+
+/// Channel `k` of the learning window, centred, scaled and tapered, into
+/// `work` as its half spectrum.
+fn transform(work: &mut Spectrum, cells: &[u8], norm: &Norm, k: usize) {
+    let (gain, mean) = (norm.gain.get(k).copied().unwrap_or(0.0), norm.mean.get(k).copied().unwrap_or(0.0));
+    let plane = cells.get(k * LEARN * LEARN..(k + 1) * LEARN * LEARN).unwrap_or(&[]);
+    for (r, (row, &tr)) in work.iter_mut().zip(TAPER.iter()).enumerate() {
+        let mut line = [0.0 as Real; LEARN];
+        let cells = plane.get(r * LEARN..(r + 1) * LEARN).unwrap_or(&[]);
+        for ((x, &v), &tc) in line.iter_mut().zip(cells.iter()).zip(TAPER.iter()) {
+            *x = gain * (value(k, v) - mean) * tr * tc;
+        }
+        let spectrum = microfft::real::rfft_32(&mut line);
+        // The real FFT packs the last column's real value into the
+        // first's imaginary part.
+        let (dc, nyquist) = (spectrum[0].re, spectrum[0].im);
+        for (slot, v) in row.iter_mut().zip(spectrum.iter()) {
+            *slot = *v;
+        }
+        if let Some(first) = row.first_mut() {
+            *first = Complex32::new(dc, 0.0);
+        }
+        if let Some(last) = row.last_mut() {
+            *last = Complex32::new(nyquist, 0.0);
+        }
+    }
+    for c in 0..COLS {
+        let mut col = [Complex32::new(0.0, 0.0); LEARN];
+        for (v, row) in col.iter_mut().zip(work.iter()) {
+            *v = row.get(c).copied().unwrap_or_default();
+        }
+        let col = microfft::complex::cfft_32(&mut col);
+        for (v, row) in col.iter().zip(work.iter_mut()) {
+            if let Some(slot) = row.get_mut(c) {
+                *slot = *v;
+            }
+        }
+    }
+}
+
+impl Cue for GradientFilter {
+    type Settings = GradientCue;
+
+    fn start(&mut self, settings: Option<&GradientCue>, frame: &Frame<'_>, e: &Ellipse) {
+        self.learned = false;
+        self.waiting = 0;
+        self.seen = None;
+        if settings.is_some() {
+            self.learn(frame, e, 1.0);
+        }
+    }
+
+    /// Reads the window about the particles' mean, finds its response's
+    /// peak, and blends each particle's response (over the peak, negative
+    /// as 0, 0 outside the window) into its similarity.
+    fn rescore<const N: usize>(
+        &mut self,
+        c: &GradientCue,
+        frame: &Frame<'_>,
+        particles: &[Particle; N],
+        similarities: &mut [Real; N],
+        n: usize,
+        half_axes: (Real, Real),
+    ) {
+        let n = n.min(N);
+        self.seen = None;
+        if n == 0 {
+            return;
+        }
+        let (mut mx, mut my) = (0.0 as Real, 0.0 as Real);
+        for p in particles.iter().take(n) {
+            (mx, my) = (mx + p.x, my + p.y);
+        }
+        let centre = (mx / n as Real, my / n as Real);
+        self.seen = self.look(frame, centre, half_axes);
+        let Some(seen) = self.seen else { return };
+        if !(c.blend > 0.0 && seen.peak > 0.0) {
+            return;
+        }
+        for (p, s) in particles.iter().zip(similarities.iter_mut()).take(n) {
+            let sr = round((p.y - centre.1) / seen.cell.1);
+            let sc = round((p.x - centre.0) / seen.cell.0);
+            let r = self.at_shift(&seen.norm, sr, sc).map_or(0.0, |r| (r / seen.peak).max(0.0));
+            *s = (1.0 - c.blend) * *s + c.blend * r;
+        }
+    }
+
+    /// Moves the estimate `pull` of the way to the response's peak, and
+    /// scales it towards the best of three cell sizes, when the response
+    /// has a clear peak.
+    fn place<const N: usize>(
+        &mut self,
+        c: &GradientCue,
+        frame: &Frame<'_>,
+        (ellipse, particles): (&mut Ellipse, &mut [Particle; N]),
+        search: bool,
+    ) -> Option<Real> {
+        let seen = self.seen?;
+        if seen.psr >= c.min_psr {
+            let (x, y) = (seen.centre.0 + seen.at.0, seen.centre.1 + seen.at.1);
+            let (dx, dy) = (c.pull * (x - ellipse.cx), c.pull * (y - ellipse.cy));
+            shift_estimate(ellipse, particles, (dx, dy), frame);
+            if c.scale_step > 0.0 && search {
+                let mut best = None;
+                for s in [1.0, 1.0 + c.scale_step, 1.0 / (1.0 + c.scale_step)] {
+                    if let Some(r) = self.at_scale(frame, ellipse, seen.cell, s, &seen.norm)
+                        && best.is_none_or(|(b, _)| r > b)
+                    {
+                        best = Some((r, s));
+                    }
+                }
+                if let Some((_, s)) = best {
+                    let f = 1.0 + c.scale_pull * (s - 1.0);
+                    scale_estimate(ellipse, particles, (f, f));
+                }
+            }
+        }
+        Some(seen.psr)
+    }
+
+    /// Learns on every `learn_every`-th confident frame at its own rate:
+    /// as a running mean over many frames it does not drift with one.
+    fn adapt(&mut self, c: &GradientCue, frame: &Frame<'_>, e: &Ellipse, confidence: Real) {
+        if confidence > c.learn_above {
+            self.waiting = self.waiting.saturating_add(1);
+            if !self.learned || self.waiting >= c.learn_every as u16 {
+                self.learn(frame, e, c.rate);
+            }
+        }
+    }
+}
+
+// The orientation count is fixed by the channel layout.
+const _: () = assert!(ORIENTATIONS == 4 && LEARN % 2 == 0 && SUPPORT < LEARN && READ >= LEARN);
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pixel::PixelFormat;
+
+    const W: usize = 320;
+    const H: usize = 240;
+
+    /// Random 6x6 blocks of grey 40 to 215 (broadband, like natural
+    /// texture), the content moved by `(dx, dy)` pixels.
+    fn blocks(dx: i32, dy: i32) -> Vec<u8> {
+        let mut next = crate::testing::lcg(11);
+        let levels: Vec<u8> = (0..64 * 64).map(|_| 40 + (next() >> 24) as u8 % 176).collect();
+        let mut px = vec![0u8; W * H];
+        for y in 0..H {
+            for x in 0..W {
+                let (u, v) = ((x as i32 - dx + 60) as usize / 6, (y as i32 - dy + 60) as usize / 6);
+                px[y * W + x] = levels[(v % 64) * 64 + u % 64];
+            }
+        }
+        px
+    }
+
+    fn frame(px: &[u8]) -> Frame<'_> {
+        Frame::packed(px, W, H, PixelFormat::Gray8).unwrap()
+    }
+    pub(super) fn frame_pub(px: &[u8]) -> Frame<'_> {
+        frame(px)
+    }
+    pub(super) fn blocks_pub(dx: i32, dy: i32) -> Vec<u8> {
+        blocks(dx, dy)
+    }
+
+    fn target() -> Ellipse {
+        Ellipse { cx: 160.0, cy: 120.0, hx: 16.0, hy: 16.0 }
+    }
+
+    #[test]
+    fn the_tables_match_the_functions_they_stand_for() {
+        // Reason: std's sin, exp and cos and the DFT's definition are the
+        // independent reference for the compile-time series.
+        for (i, &t) in TAPER.iter().enumerate() {
+            let s = (std::f64::consts::PI * (i as f64 + 0.5) / LEARN as f64).sin();
+            assert!((t as f64 - s * s).abs() < 1e-6, "taper {i}");
+        }
+        for (u, &p) in PEAK.iter().enumerate() {
+            let e: f64 = (0..LEARN)
+                .map(|k| {
+                    let d = k.min(LEARN - k) as f64;
+                    (-d * d / 2.0).exp() * (std::f64::consts::TAU * (u * k) as f64 / LEARN as f64).cos()
+                })
+                .sum();
+            assert!((p as f64 - e).abs() < 1e-6, "peak spectrum {u}: {p} against {e}");
+        }
+    }
+
+    #[test]
+    fn the_peak_is_where_the_texture_moved() {
+        // Reason: the scene's truth. The filter learns the texture about
+        // the target; a frame whose content moved by (dx, dy) must answer
+        // with its peak (dx, dy) from the window's centre, to within a
+        // cell's share (cells are 2.5 px here), and with a clear PSR.
+        let first = blocks(0, 0);
+        let mut f = GradientFilter::new();
+        f.learn(&frame(&first), &target(), 1.0);
+        assert!(f.learned);
+        for (dx, dy) in [(0, 0), (7, -5), (-12, 9), (20, 3)] {
+            let moved = blocks(dx, dy);
+            let seen = f.look(&frame(&moved), (160.0, 120.0), (16.0, 16.0)).unwrap();
+            assert!((seen.at.0 - dx as Real).abs() < 1.5, "({dx}, {dy}): x at {:?}", seen.at);
+            assert!((seen.at.1 - dy as Real).abs() < 1.5, "({dx}, {dy}): y at {:?}", seen.at);
+            assert!(seen.psr > 5.0, "({dx}, {dy}): psr {}", seen.psr);
+        }
+        // Read about another centre: the same place in the frame.
+        let moved = blocks(7, -5);
+        let seen = f.look(&frame(&moved), (150.0, 126.0), (16.0, 16.0)).unwrap();
+        assert!((150.0 + seen.at.0 - 167.0).abs() < 1.5 && (126.0 + seen.at.1 - 115.0).abs() < 1.5, "{:?}", seen.at);
+    }
+
+    #[test]
+    fn a_flat_frame_teaches_nothing_and_answers_nothing() {
+        // Reason: a window of one grey level has no energy to normalise
+        // (the invariant `normalise` guards).
+        let flat = vec![90u8; W * H];
+        let mut f = GradientFilter::new();
+        f.learn(&frame(&flat), &target(), 1.0);
+        assert!(!f.learned);
+        let first = blocks(0, 0);
+        f.learn(&frame(&first), &target(), 1.0);
+        assert!(f.look(&frame(&flat), (160.0, 120.0), (16.0, 16.0)).is_none());
+    }
+
+    #[test]
+    fn particles_on_the_target_score_higher_than_particles_off_it() {
+        // Reason: the blend's purpose, on the scene's truth: the texture
+        // moved by (9, 4); particles there keep their similarity plus the
+        // blend (response over the peak, about 1), particles two boxes
+        // away gain little, and particles outside the window gain nothing.
+        let first = blocks(0, 0);
+        let moved = blocks(9, 4);
+        let mut f = GradientFilter::new();
+        f.learn(&frame(&first), &target(), 1.0);
+        let mut ps = [Particle::default(); 4];
+        for (p, (x, y)) in ps.iter_mut().zip([(169.0, 124.0), (169.0, 124.0), (120.0, 90.0), (400.0, 120.0)]) {
+            (p.x, p.y, p.hx, p.hy) = (x, y, 16.0, 16.0);
+        }
+        let mut sims = [0.5; 4];
+        let c = GradientCue::MEASURED;
+        f.rescore(&c, &frame(&moved), &ps, &mut sims, 4, (16.0, 16.0));
+        assert!(sims[0] > 0.5 + 0.8 * c.blend, "{sims:?}");
+        assert!(sims[2] < sims[0] - 0.5 * c.blend, "{sims:?}");
+        assert_eq!(sims[3], 0.5 * (1.0 - c.blend), "outside the window: {sims:?}");
+    }
+}
+#[cfg(test)]
+mod debug {
+    use super::*;
+    #[test]
+    fn dbg() {
+        let first = super::tests::blocks_pub(0, 0);
+        let mut f = GradientFilter::new();
+        f.learn(&super::tests::frame_pub(&first), &Ellipse { cx: 160.0, cy: 120.0, hx: 16.0, hy: 16.0 }, 1.0);
+        let moved = super::tests::blocks_pub(7, -5);
+        let fr = super::tests::frame_pub(&moved);
+        channels::read(&fr, (160.0, 120.0), cell_size((16.0, 16.0)), READ, &mut f.cells);
+        let norm = normalise(&f.cells, READ, None).unwrap();
+        for sr in -6..=6 {
+            let mut line = String::new();
+            for sc in -16..=16 {
+                line += &format!("{:5.0}", 1e5 * f.at_shift(&norm, sr, sc).unwrap());
+            }
+            println!("{sr:3} {line}");
+        }
+        let flat = vec![90u8; 320 * 240];
+        let ff = super::tests::frame_pub(&flat);
+        channels::read(&ff, (160.0, 120.0), cell_size((16.0, 16.0)), READ, &mut f.cells);
+        println!("{:?}", normalise(&f.cells, READ, None));
+    }
+}
