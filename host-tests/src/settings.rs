@@ -350,7 +350,9 @@ fn gradient(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
         [rate, above, every, pull, step, scale_pull, psr, blend] => Some(pftrack::GradientCue {
             rate: num(key, rate)?,
             learn_above: num(key, above)?,
-            learn_every: every.parse().map_err(|_| format!("{key}: `{every}`: LEARN_EVERY is a count from 1 to 255"))?,
+            learn_every: every
+                .parse()
+                .map_err(|_| format!("{key}: `{every}`: LEARN_EVERY is a count from 1 to 255"))?,
             pull: num(key, pull)?,
             scale_step: num(key, step)?,
             scale_pull: num(key, scale_pull)?,

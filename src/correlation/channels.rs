@@ -43,7 +43,8 @@ pub(crate) fn read(frame: &Frame<'_>, centre: (Real, Real), cell: (Real, Real), 
     }
     let (xmax, ymax) = (frame.width().saturating_sub(1) as Real, frame.height().saturating_sub(1) as Real);
     let step = (cell.0 / POINTS as Real, cell.1 / POINTS as Real);
-    let at = |i: usize, c: Real, step: Real, max: Real| clamp(c + (i as Real + 0.5 - n as Real) * step, 0.0, max) as usize;
+    let at =
+        |i: usize, c: Real, step: Real, max: Real| clamp(c + (i as Real + 0.5 - n as Real) * step, 0.0, max) as usize;
     let mut columns = [0usize; MAX_POINTS];
     for (j, x) in columns.iter_mut().enumerate().take(points) {
         *x = at(j, centre.0, step.0, xmax);
@@ -133,7 +134,11 @@ fn orientation(gx: i32, gy: i32) -> Option<(usize, Real)> {
     // In units of π / 4, in [0, 4).
     let quarter = if gx >= 0 { first } else { 4.0 - first };
     let b = quarter * (ORIENTATIONS as Real / 4.0) - 0.5;
-    if b < 0.0 { Some((ORIENTATIONS - 1, b + 1.0)) } else { Some(((b as usize).min(ORIENTATIONS - 1), b - (b as usize) as Real)) }
+    if b < 0.0 {
+        Some((ORIENTATIONS - 1, b + 1.0))
+    } else {
+        Some(((b as usize).min(ORIENTATIONS - 1), b - (b as usize) as Real))
+    }
 }
 
 /// One row of points: the lumas of `row` (a row of `frame`) at `columns`.

@@ -1,5 +1,5 @@
 //! A correlation filter on gradient channels over a wide window: grey and
-//! [`ORIENTATIONS`] gradient orientations ([`super::channels`]) on cells
+//! [`super::channels::ORIENTATIONS`] gradient orientations ([`super::channels`]) on cells
 //! about a thirteenth of the box, learnt jointly over a window 2.5 times the
 //! box and read over one [`READ`] cells across (3.75 times the box).
 //!
@@ -28,7 +28,7 @@
 //! stack while it learns (audit/budgets.txt).
 
 use super::GradientCue;
-use super::channels::{self, CHANNELS, MAX_CELLS, ORIENTATIONS};
+use super::channels::{self, CHANNELS, MAX_CELLS};
 use super::filter::{exp, log_luma, sin};
 use crate::cue::Cue;
 use crate::filter::{Particle, scale_estimate, shift_estimate};
@@ -293,20 +293,15 @@ impl GradientFilter {
         let mean = s1 / count as Real;
         let sd = sqrt((s2 / count as Real - mean * mean).max(0.0));
         let psr = if sd > 0.0 { (best - mean) / sd } else { 0.0 };
-        Some(Seen {
-            centre,
-            cell,
-            norm,
-            peak: best,
-            at: ((c as Real + dc) * cell.0, (r as Real + dr) * cell.1),
-            psr,
-        })
+        Some(Seen { centre, cell, norm, peak: best, at: ((c as Real + dc) * cell.0, (r as Real + dr) * cell.1), psr })
     }
 
     /// The response at zero shift of the window about `e`'s centre with
-    /// cells `scale` times `cell`, normalised by `norm` (the scale search's
-    /// measure: the filter's match at one size against another).
-    fn at_scale(&self, frame: &Frame<'_>, e: &Ellipse, cell: (Real, Real), scale: Real, norm: &Norm) -> Option<Real> {
+    /// cells `scale` times `cell` (the scale search's measure: the filter's
+    /// match at one size against another). Each size is normalised over its
+    /// own cells: larger cells see larger differences between their points
+    /// on smooth content, which would otherwise favour growing.
+    fn at_scale(&self, frame: &Frame<'_>, e: &Ellipse, cell: (Real, Real), scale: Real) -> Option<Real> {
         // A lattice one cell wider than the support, so that cell
         // `n / 2` (which starts at the centre) is the support's middle.
         const N: usize = SUPPORT + 1;
@@ -314,7 +309,8 @@ impl GradientFilter {
         if !channels::read(frame, (e.cx, e.cy), (cell.0 * scale, cell.1 * scale), N, &mut cells) {
             return None;
         }
-        self.response(&cells, N, norm, (N / 2 - HALF) as i32, (N / 2 - HALF) as i32)
+        let norm = normalise(&cells, N, None)?;
+        self.response(&cells, N, &norm, (N / 2 - HALF) as i32, (N / 2 - HALF) as i32)
     }
 
     /// Learns the window around `e` at `rate` (the first window is learnt
@@ -344,7 +340,8 @@ impl GradientFilter {
 fn normalise(cells: &[u8], n: usize, taper: Option<&[Real; LEARN]>) -> Option<Norm> {
     let mut norm = Norm::default();
     let mut energy = [0.0 as Real; CHANNELS];
-    let weight = |i: usize| taper.map_or(1.0, |t| t.get(i / n).copied().unwrap_or(0.0) * t.get(i % n).copied().unwrap_or(0.0));
+    let weight =
+        |i: usize| taper.map_or(1.0, |t| t.get(i / n).copied().unwrap_or(0.0) * t.get(i % n).copied().unwrap_or(0.0));
     for (k, (mean, e)) in norm.mean.iter_mut().zip(energy.iter_mut()).enumerate() {
         let plane = cells.get(k * n * n..(k + 1) * n * n)?;
         *mean = plane.iter().map(|&v| value(k, v)).sum::<Real>() / (n * n) as Real;
@@ -553,7 +550,7 @@ impl Cue for GradientFilter {
             if c.scale_step > 0.0 && search {
                 let mut best = None;
                 for s in [1.0, 1.0 + c.scale_step, 1.0 / (1.0 + c.scale_step)] {
-                    if let Some(r) = self.at_scale(frame, ellipse, seen.cell, s, &seen.norm)
+                    if let Some(r) = self.at_scale(frame, ellipse, seen.cell, s)
                         && best.is_none_or(|(b, _)| r > b)
                     {
                         best = Some((r, s));
@@ -580,8 +577,8 @@ impl Cue for GradientFilter {
     }
 }
 
-// The orientation count is fixed by the channel layout.
-const _: () = assert!(ORIENTATIONS == 4 && LEARN % 2 == 0 && SUPPORT < LEARN && READ >= LEARN);
+// The support fits the learning window, which fits the read window.
+const _: () = assert!(SUPPORT < LEARN && LEARN <= READ);
 
 #[cfg(test)]
 mod tests {
@@ -608,12 +605,6 @@ mod tests {
 
     fn frame(px: &[u8]) -> Frame<'_> {
         Frame::packed(px, W, H, PixelFormat::Gray8).unwrap()
-    }
-    pub(super) fn frame_pub(px: &[u8]) -> Frame<'_> {
-        frame(px)
-    }
-    pub(super) fn blocks_pub(dx: i32, dy: i32) -> Vec<u8> {
-        blocks(dx, dy)
     }
 
     fn target() -> Ellipse {
@@ -695,30 +686,5 @@ mod tests {
         assert!(sims[0] > 0.5 + 0.8 * c.blend, "{sims:?}");
         assert!(sims[2] < sims[0] - 0.5 * c.blend, "{sims:?}");
         assert_eq!(sims[3], 0.5 * (1.0 - c.blend), "outside the window: {sims:?}");
-    }
-}
-#[cfg(test)]
-mod debug {
-    use super::*;
-    #[test]
-    fn dbg() {
-        let first = super::tests::blocks_pub(0, 0);
-        let mut f = GradientFilter::new();
-        f.learn(&super::tests::frame_pub(&first), &Ellipse { cx: 160.0, cy: 120.0, hx: 16.0, hy: 16.0 }, 1.0);
-        let moved = super::tests::blocks_pub(7, -5);
-        let fr = super::tests::frame_pub(&moved);
-        channels::read(&fr, (160.0, 120.0), cell_size((16.0, 16.0)), READ, &mut f.cells);
-        let norm = normalise(&f.cells, READ, None).unwrap();
-        for sr in -6..=6 {
-            let mut line = String::new();
-            for sc in -16..=16 {
-                line += &format!("{:5.0}", 1e5 * f.at_shift(&norm, sr, sc).unwrap());
-            }
-            println!("{sr:3} {line}");
-        }
-        let flat = vec![90u8; 320 * 240];
-        let ff = super::tests::frame_pub(&flat);
-        channels::read(&ff, (160.0, 120.0), cell_size((16.0, 16.0)), READ, &mut f.cells);
-        println!("{:?}", normalise(&f.cells, READ, None));
     }
 }

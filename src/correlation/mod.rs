@@ -11,7 +11,7 @@ mod filter;
 #[cfg(feature = "gradient")]
 mod gradient;
 
-#[cfg(not(feature = "correlation"))]
+#[cfg(not(all(feature = "correlation", feature = "gradient")))]
 use crate::cue::Absent;
 use crate::cue::not_built;
 use crate::error::{ConfigError, check, positive};

@@ -495,3 +495,66 @@ fn the_share_of_hypotheses_is_validated() {
     }
     assert!(Config { sure_share: 0.01, ..Config::default() }.validate().is_ok());
 }
+
+#[test]
+fn the_gradient_filter_needs_its_feature_and_sane_settings() {
+    // Reason: a build without the `gradient` feature has no filter, and a
+    // setting outside its documented range is named, not clamped.
+    use crate::GradientCue;
+    let on = Config { gradient: Some(GradientCue::MEASURED), correlation: None, ..Config::default() };
+    if !cfg!(feature = "gradient") {
+        let err = Tracker::<10>::new(on, 1).unwrap_err();
+        let want = ConfigError { field: "gradient", problem: ParamProblem::NotBuilt { feature: "gradient" } };
+        assert_eq!(err, Error::Config(want));
+        return;
+    }
+    assert!(Tracker::<10>::new(on, 1).is_ok());
+    let m = GradientCue::MEASURED;
+    for (cue, field, problem) in [
+        (GradientCue { rate: 0.0, ..m }, "gradient.rate", ParamProblem::OutOfRange),
+        (GradientCue { rate: Real::NAN, ..m }, "gradient.rate", ParamProblem::NonFinite),
+        (GradientCue { learn_above: 1.5, ..m }, "gradient.learn_above", ParamProblem::OutOfRange),
+        (GradientCue { learn_every: 0, ..m }, "gradient.learn_every", ParamProblem::OutOfRange),
+        (GradientCue { pull: Real::INFINITY, ..m }, "gradient.pull", ParamProblem::NonFinite),
+        (GradientCue { scale_step: 0.5, ..m }, "gradient.scale_step", ParamProblem::OutOfRange),
+        (GradientCue { scale_pull: -0.1, ..m }, "gradient.scale_pull", ParamProblem::OutOfRange),
+        (GradientCue { min_psr: 21.0, ..m }, "gradient.min_psr", ParamProblem::OutOfRange),
+        (GradientCue { blend: Real::NAN, ..m }, "gradient.blend", ParamProblem::NonFinite),
+    ] {
+        let err = Tracker::<10>::new(Config { gradient: Some(cue), ..Config::default() }, 1).unwrap_err();
+        assert_eq!(err, Error::Config(ConfigError { field, problem }));
+    }
+}
+
+#[cfg(feature = "gradient")]
+#[test]
+fn the_gradient_filter_follows_a_texture_colour_cannot_place() {
+    // Reason: generated scene with known motion, as for the grey-level
+    // filter: grey 64 or 95 in random 8x8 blocks (one colour bin), the
+    // texture panning 2 px right and 1 px down a frame, so the content
+    // first boxed is centred at (60 + 2t, 45 + t) in frame t. The
+    // gradient filter, alone beside colour, places the box within 2 px.
+    let mut next = crate::testing::lcg(11);
+    let (bw, bh) = (W / 8 + 4, H / 8 + 4);
+    let levels: Vec<u8> = (0..bw * bh).map(|_| if next() >> 31 == 1 { 95 } else { 64 }).collect();
+    let scene = |t: usize| {
+        let mut px = vec![0u8; W * H * 3];
+        for y in 0..H {
+            for x in 0..W {
+                let (u, v) = (x + 24 - 2 * t, y + 24 - t);
+                px[(y * W + x) * 3..][..3].fill(levels[(v / 8) * bw + u / 8]);
+            }
+        }
+        px
+    };
+    let cfg =
+        Config { edges: None, correlation: None, gradient: Some(crate::GradientCue::MEASURED), ..Config::default() };
+    let mut t: Tracker<60> = Tracker::new(cfg, 1).unwrap();
+    t.init(&frame(&scene(0)), BOX).unwrap();
+    for k in 1..=10 {
+        let e = t.step(&frame(&scene(k))).unwrap();
+        let (cx, cy) = e.bbox().centre();
+        let (x, y) = (60.0 + 2.0 * k as Real, 45.0 + k as Real);
+        assert!((cx - x).abs() <= 2.0 && (cy - y).abs() <= 2.0, "frame {k}: ({cx}, {cy}) against ({x}, {y})");
+    }
+}
