@@ -119,6 +119,8 @@ fn run() -> bool {
         "pf-still" => make_still_tracker(seed).map(|t| t.map(Any::Pf)),
         #[cfg(feature = "all-options")]
         "pf-sure" => make_sure_tracker(seed).map(|t| t.map(Any::Pf)),
+        #[cfg(feature = "gradient")]
+        "pf-gradient" => make_gradient_tracker(seed).map(|t| t.map(Any::Pf)),
         "meanshift" => make_meanshift(MeanShiftConfig::default()).map(|t| t.map(Any::MeanShift)),
         "kalman" => make_meanshift(MeanShiftConfig::kalman()).map(|t| t.map(Any::MeanShift)),
         _ => fail!("tracker `{kind}` is not pf, meanshift or kalman"),
@@ -249,6 +251,17 @@ fn make_still_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftra
 #[inline(never)]
 fn make_sure_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
     let t = FwTracker::new(Config { sure_share: SURE_SHARE, ..Config::default() }, seed)?;
+    Ok(cortex_m::singleton!(: FwTracker = t))
+}
+
+/// [`make_tracker`] with the gradient filter in place of the grey-level
+/// one, in the build with the `gradient` feature, so that `audit/run` can
+/// report what it costs.
+#[cfg(feature = "gradient")]
+#[inline(never)]
+fn make_gradient_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
+    let config = Config { gradient: Some(pftrack::GradientCue::MEASURED), correlation: None, ..Config::default() };
+    let t = FwTracker::new(config, seed)?;
     Ok(cortex_m::singleton!(: FwTracker = t))
 }
 
