@@ -10,21 +10,24 @@
 //! benchmarks (ECO-HC, BACF, STRCF) read them.
 //!
 //! The cells are kept as bytes (the window's cells are the filter's largest
-//! memory): grey as the cells' mean luma, each orientation as its mean
-//! magnitude in luma levels per two lattice points, rounded and saturated
-//! at 255 (an edge that strong in all four points of a cell is rare, and
-//! saturating it is HOG's clipping in effect).
+//! memory): grey as the log of the cells' mean luma scaled to a byte, each
+//! orientation as its mean magnitude in luma levels per two lattice points,
+//! rounded and saturated at 255 (an edge that strong in all four points of
+//! a cell is rare, and saturating it is HOG's clipping in effect). Every
+//! step is in integers and tables, so that a core without an FPU reads a
+//! window as fast as one with it.
 
+use super::filter::LOG_LUMA;
 use crate::frame::Frame;
 use crate::pixel::{self, Loop, Loops, PixelRead, RowReader};
-use crate::scalar::{Real, clamp, sqrt_q4};
+use crate::scalar::{Real, clamp};
 
 /// Unsigned gradient orientations: channels 1 to `ORIENTATIONS`.
 pub(crate) const ORIENTATIONS: usize = 4;
 /// Grey, then the orientations.
 pub(crate) const CHANNELS: usize = 1 + ORIENTATIONS;
 /// The largest lattice the filter reads, in cells per side.
-pub(crate) const MAX_CELLS: usize = 48;
+pub(crate) const MAX_CELLS: usize = 46;
 /// Lattice points per cell side.
 const POINTS: usize = 2;
 /// The largest lattice, in points per side.
@@ -64,7 +67,9 @@ pub(crate) fn read(frame: &Frame<'_>, centre: (Real, Real), cell: (Real, Real), 
     let mut above = here;
     row(1, &mut below);
     let mut grey = [0u16; MAX_CELLS];
-    let mut grad = [[0.0 as Real; MAX_CELLS]; ORIENTATIONS];
+    // Magnitudes in 1/65,536ths of a luma level: each point adds at most
+    // 362 · 2^16 · ... (`magnitude` below), a cell four points.
+    let mut grad = [[0u32; MAX_CELLS]; ORIENTATIONS];
     let plane = n * n;
     for i in 0..points {
         for c in 0..points {
@@ -76,10 +81,9 @@ pub(crate) fn read(frame: &Frame<'_>, centre: (Real, Real), cell: (Real, Real), 
             if let Some(g) = grey.get_mut(cc) {
                 *g += l as u16;
             }
-            if let Some((bin, f)) = orientation(gx, gy) {
-                let m = sqrt_q4((gx * gx + gy * gy) as u32) as Real / 16.0;
+            if let Some((bin, f, m)) = orientation(gx, gy) {
                 if let Some(g) = grad.get_mut(bin).and_then(|g| g.get_mut(cc)) {
-                    *g += m * (1.0 - f);
+                    *g += m * (256 - f);
                 }
                 if let Some(g) = grad.get_mut((bin + 1) % ORIENTATIONS).and_then(|g| g.get_mut(cc)) {
                     *g += m * f;
@@ -92,16 +96,18 @@ pub(crate) fn read(frame: &Frame<'_>, centre: (Real, Real), cell: (Real, Real), 
             let per = (POINTS * POINTS) as u16;
             for (cc, g) in grey.iter_mut().enumerate().take(n) {
                 if let Some(o) = out.get_mut(r * n + cc) {
-                    *o = ((*g + per / 2) / per) as u8;
+                    *o = LOG_GREY.get(((*g + per / 2) / per) as usize).copied().unwrap_or(0);
                 }
                 *g = 0;
             }
+            // The mean magnitude per point, rounded, saturated.
+            let unit = (POINTS * POINTS) as u32 * 65_536;
             for (k, channel) in grad.iter_mut().enumerate() {
                 for (cc, g) in channel.iter_mut().enumerate().take(n) {
                     if let Some(o) = out.get_mut((k + 1) * plane + r * n + cc) {
-                        *o = (*g / (POINTS * POINTS) as Real + 0.5).min(255.0) as u8;
+                        *o = ((*g + unit / 2) / unit).min(255) as u8;
                     }
-                    *g = 0.0;
+                    *g = 0;
                 }
             }
         }
@@ -114,31 +120,120 @@ pub(crate) fn read(frame: &Frame<'_>, centre: (Real, Real), cell: (Real, Real), 
     true
 }
 
-/// The orientation of the gradient `(gx, gy)`, unsigned (in `[0, π)`), as
-/// the lower of the two orientation bins it falls between and its share of
-/// the upper one; `None` for no gradient. Bin `b` is centred on
-/// `(b + ½) π / ORIENTATIONS`. The angle comes from a rational
-/// approximation of the arctangent (within 0.005 rad, a hundred and fiftieth
-/// of a bin), so that no trigonometry runs per point.
-fn orientation(gx: i32, gy: i32) -> Option<(usize, Real)> {
-    if gx == 0 && gy == 0 {
-        return None;
+/// The grey channel's value for a cell's mean luma `l`: `ln(1 + l)` scaled
+/// to a byte (`255 · ln(1 + l) / ln 256`), so that a shadow scales the
+/// lumas rather than shifting the values (MOSSE's log-luma), computed at
+/// compile time.
+const LOG_GREY: [u8; 256] = log_grey();
+
+// Evaluated at compile time only (for a `const`): an index out of range
+// would stop the build, never the device.
+#[allow(clippy::indexing_slicing)]
+const fn log_grey() -> [u8; 256] {
+    let mut out = [0u8; 256];
+    let mut l = 0;
+    while l < 256 {
+        let v = LOG_LUMA[l] as f64 / LOG_LUMA[255] as f64 * 255.0 + 0.5;
+        out[l] = v as u8;
+        l += 1;
     }
+    out
+}
+
+/// The arctangent of `z / 256` for `z` in `0..=256`, in 256ths of an
+/// eighth of a turn (`atan(z / 256) / (π / 4) · 256`, rounded), and
+/// `sqrt(1 + (z / 256)²) · 256`, rounded: a gradient's direction and length
+/// from the ratio of its smaller component to its larger, with no
+/// trigonometry or root per point. Computed at compile time.
+const ATAN: [u16; 257] = atan_table();
+const LENGTH: [u16; 257] = length_table();
+
+// Evaluated at compile time only (for a `const`): an index out of range
+// would stop the build, never the device.
+#[allow(clippy::indexing_slicing)]
+const fn atan_table() -> [u16; 257] {
+    let mut out = [0u16; 257];
+    let mut z = 0;
+    while z <= 256 {
+        let x = z as f64 / 256.0;
+        // atan(x) = π/4 + atan((x − 1) / (x + 1)): an argument within
+        // ±1/3 for x in [1/2, 1], where the series converges fast.
+        let (t, base) = if x > 0.5 { ((x - 1.0) / (x + 1.0), core::f64::consts::FRAC_PI_4) } else { (x, 0.0) };
+        let (mut power, mut sum, mut k) = (t, 0.0, 0);
+        while k < 40 {
+            let term = power / (2 * k + 1) as f64;
+            sum += if k % 2 == 0 { term } else { -term };
+            power *= t * t;
+            k += 1;
+        }
+        out[z] = ((base + sum) / core::f64::consts::FRAC_PI_4 * 256.0 + 0.5) as u16;
+        z += 1;
+    }
+    out
+}
+
+// Evaluated at compile time only (for a `const`): an index out of range
+// would stop the build, never the device.
+#[allow(clippy::indexing_slicing)]
+const fn length_table() -> [u16; 257] {
+    let mut out = [0u16; 257];
+    let mut z = 0;
+    while z <= 256 {
+        let x = 1.0 + (z as f64 / 256.0) * (z as f64 / 256.0);
+        // Newton's root from 1 (x is in [1, 2]).
+        let (mut y, mut k) = (1.0, 0);
+        while k < 30 {
+            y = 0.5 * (y + x / y);
+            k += 1;
+        }
+        out[z] = (y * 256.0 + 0.5) as u16;
+        z += 1;
+    }
+    out
+}
+
+/// `65,536 / d` for `d` in `1..=255` (0 for 0): the ratio of a gradient's
+/// components with a multiplication, on cores without a divider too.
+const RECIPROCAL: [u32; 256] = reciprocal_table();
+
+// Evaluated at compile time only (for a `const`): an index out of range
+// would stop the build, never the device.
+#[allow(clippy::indexing_slicing)]
+const fn reciprocal_table() -> [u32; 256] {
+    let mut out = [0u32; 256];
+    let mut d = 1;
+    while d < 256 {
+        out[d] = (65_536 + d as u32 / 2) / d as u32;
+        d += 1;
+    }
+    out
+}
+
+/// The gradient `(gx, gy)` (each within ±255) as its unsigned orientation
+/// (in `[0, π)`): the lower of the two orientation bins it falls between,
+/// its share of the upper one in 256ths, and its length in 256ths of a
+/// luma level; `None` for no gradient. Bin `b` is centred on
+/// `(b + ½) π / ORIENTATIONS`. Integers and tables only: the angle is
+/// within about a 500th of a bin of the true one, the length within 0.5%.
+fn orientation(gx: i32, gy: i32) -> Option<(usize, u32, u32)> {
     // Fold onto [0, π): an edge and its opposite are one orientation.
     let (gx, gy) = if gy < 0 || (gy == 0 && gx < 0) { (-gx, -gy) } else { (gx, gy) };
-    let (ax, ay) = (gx.abs() as Real, gy as Real);
-    // The angle from the nearer axis, in eighths of a turn: atan(z) for
-    // z in [0, 1] is about z·π/4 + 0.273·z·(1 − z).
-    let octant = |z: Real| z + 0.3476 * z * (1.0 - z);
-    let first = if ay <= ax { octant(ay / ax) } else { 2.0 - octant(ax / ay) };
-    // In units of π / 4, in [0, 4).
-    let quarter = if gx >= 0 { first } else { 4.0 - first };
-    let b = quarter * (ORIENTATIONS as Real / 4.0) - 0.5;
-    if b < 0.0 {
-        Some((ORIENTATIONS - 1, b + 1.0))
-    } else {
-        Some(((b as usize).min(ORIENTATIONS - 1), b - (b as usize) as Real))
+    let (ax, ay) = (gx.unsigned_abs().min(255), gy.unsigned_abs().min(255));
+    let (big, small) = (ax.max(ay), ax.min(ay));
+    if big == 0 {
+        return None;
     }
+    let recip = RECIPROCAL.get(big as usize).copied().unwrap_or(0);
+    let z = ((small * recip + 128) >> 8).min(256) as usize;
+    let (angle, length) = (ATAN.get(z).copied().unwrap_or(0) as u32, LENGTH.get(z).copied().unwrap_or(256) as u32);
+    // From the x axis, in 256ths of an eighth of a turn (π is 1024).
+    let first = if ay <= ax { angle } else { 512 - angle };
+    let turn = if gx >= 0 { first } else { 1024 - first };
+    // Bins are a quarter of π wide (256) for four orientations, centred
+    // half a bin in.
+    let width = 1024 / ORIENTATIONS as u32;
+    let b = (turn + 1024 - width / 2) % 1024;
+    Some((((b / width) as usize).min(ORIENTATIONS - 1), (b % width) * 256 / width, big * length))
 }
 
 /// One row of points: the lumas of `row` (a row of `frame`) at `columns`.
@@ -175,34 +270,53 @@ mod tests {
     use crate::pixel::PixelFormat;
 
     #[test]
-    fn orientations_fall_in_the_bins_their_angles_say() {
-        // Reason: std's atan2 is the reference; the bins are centred on
-        // (b + 1/2)·45°, so an angle's bin and share follow by hand.
+    fn orientations_and_lengths_are_what_trigonometry_says() {
+        // Reason: std's atan2 and hypot are the reference; the bins are
+        // centred on (b + 1/2)·45°, so an angle's bin and share follow by
+        // hand.
         for deg in 0..360 {
             let t = (deg as f64 + 0.3).to_radians();
             let (gx, gy) = ((100.0 * t.cos()).round() as i32, (100.0 * t.sin()).round() as i32);
-            let (bin, f) = orientation(gx, gy).unwrap();
-            let mut a = (gy as f64).atan2(gx as f64);
-            if a < 0.0 {
-                a += std::f64::consts::PI;
-            }
-            if a >= std::f64::consts::PI {
-                a -= std::f64::consts::PI;
-            }
-            let b = a / std::f64::consts::PI * ORIENTATIONS as f64 - 0.5;
-            let want = b.rem_euclid(ORIENTATIONS as f64);
-            let got = bin as f64 + f as f64;
+            let (bin, f, m) = orientation(gx, gy).unwrap();
+            let a = (gy as f64).atan2(gx as f64).rem_euclid(std::f64::consts::PI);
+            let want = (a / std::f64::consts::PI * ORIENTATIONS as f64 - 0.5).rem_euclid(ORIENTATIONS as f64);
+            let got = bin as f64 + f as f64 / 256.0;
             let d = (got - want).abs().min(ORIENTATIONS as f64 - (got - want).abs());
-            assert!(d < 0.01, "{deg}°: bin {bin} + {f} against {want}");
+            assert!(d < 0.01, "{deg}°: bin {bin} + {f}/256 against {want}");
+            let length = (gx as f64).hypot(gy as f64);
+            assert!(
+                (m as f64 / 256.0 - length).abs() < 0.005 * length + 0.01,
+                "{deg}°: length {m}/256 against {length}"
+            );
         }
         assert_eq!(orientation(0, 0), None);
+        assert_eq!(orientation(255, -255).map(|(_, _, m)| m), Some(255 * 362), "the longest, in range");
+    }
+
+    #[test]
+    fn the_tables_match_the_functions_they_stand_for() {
+        // Reason: std's atan, sqrt and ln are the independent reference
+        // for the compile-time series.
+        for z in 0..=256usize {
+            let x = z as f64 / 256.0;
+            assert!((ATAN[z] as f64 - x.atan() / std::f64::consts::FRAC_PI_4 * 256.0).abs() <= 0.5 + 1e-9, "atan {z}");
+            assert!((LENGTH[z] as f64 - (1.0 + x * x).sqrt() * 256.0).abs() <= 0.5 + 1e-9, "length {z}");
+        }
+        for (l, &g) in LOG_GREY.iter().enumerate() {
+            let want = (l as f64).ln_1p() / 256f64.ln() * 255.0;
+            assert!((g as f64 - want).abs() <= 0.5 + 1e-4, "grey {l}: {g} against {want}");
+        }
+        for d in 1..256u32 {
+            assert!((RECIPROCAL[d as usize] as f64 - 65_536.0 / d as f64).abs() <= 0.5, "1/{d}");
+        }
     }
 
     #[test]
     fn a_vertical_edge_fills_the_horizontal_gradient_bins_only() {
         // Reason: a step from dark to light along x has gradients along x
         // (0°), which lie half in bin 3 (centred on 157.5°, wrapping) and
-        // half in bin 0 (22.5°); grey is the mean luma by construction.
+        // half in bin 0 (22.5°); grey is the mean luma's log by
+        // construction.
         let (w, h) = (64, 32);
         let px: Vec<u8> = (0..w * h).map(|i| if i % w < 32 { 40 } else { 200 }).collect();
         let frame = Frame::packed(&px, w, h, PixelFormat::Gray8).unwrap();
@@ -211,8 +325,8 @@ mod tests {
         assert!(read(&frame, (32.0, 16.0), (2.0, 2.0), n, &mut out));
         let at = |k: usize, r: usize, c: usize| out[(k * n + r) * n + c];
         for r in 0..n {
-            assert_eq!(at(0, r, 0), 40);
-            assert_eq!(at(0, r, n - 1), 200);
+            assert_eq!(at(0, r, 0), LOG_GREY[40]);
+            assert_eq!(at(0, r, n - 1), LOG_GREY[200]);
             // Points one pixel apart, point j at x = 24 + j: the edge
             // between x = 31 and 32 is seen by points 7 and 8 (gx = 160
             // each), the last of cell 3 and the first of cell 4. Each cell

@@ -155,7 +155,7 @@ pub(super) const fn exp(x: f64) -> f64 {
 /// `ln(1 + l)` for every luma `l`, computed at compile time (the window's
 /// samples are log-luma, as in MOSSE, so that a shadow scales rather than
 /// shifts them; a table spares 2048 logarithms a frame).
-const LOG_LUMA: [Real; 256] = log_luma_table();
+pub(super) const LOG_LUMA: [Real; 256] = log_luma_table();
 
 // Evaluated at compile time only (for a `const`): an index out of range
 // would stop the build, never the device.

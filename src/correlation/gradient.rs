@@ -1,7 +1,7 @@
 //! A correlation filter on gradient channels over a wide window: grey and
-//! [`super::channels::ORIENTATIONS`] gradient orientations ([`super::channels`]) on cells
-//! about a thirteenth of the box, learnt jointly over a window 2.5 times the
-//! box and read over one [`READ`] cells across (3.75 times the box).
+//! four gradient orientations ([`super::channels`]) on cells about a
+//! thirteenth of the box, learnt jointly over a window 2.5 times the box and
+//! read over one [`READ`] cells across (about 3.6 times the box).
 //!
 //! Learning is CSR-DCF's (Lukežič et al. 2017): each learning frame the
 //! channels' joint closed-form filter `H_k = G X_k* / (Σ_j |X_j|² + λ)` is
@@ -15,21 +15,25 @@
 //!
 //! Reading is in space, where the cut filter is small: the response at a
 //! shift is the sum over channels and support cells of the filter times the
-//! window's cells (normalised as learnt, over the whole read window). It is
+//! window's cells (normalised as learnt, over the whole read window),
+//! weighted by how far the shift is from the window's centre. It is
 //! evaluated where it is needed: on a coarse grid of shifts every
 //! [`COARSE`] cells and about its best one, for the peak and its
-//! peak-to-sidelobe ratio, and at each particle, whose similarity it joins
-//! ([`GradientCue::blend`]). No response FFT runs, and only the learning
-//! frames transform (every [`GradientCue::learn_every`]-th confident frame).
+//! peak-to-sidelobe ratio, and, where [`GradientCue::blend`] asks, at each
+//! particle. No response FFT runs, and only the learning frames transform
+//! (every [`GradientCue::learn_every`]-th confident frame). The sums are
+//! of integer products (the cells are bytes, the filter is rounded to
+//! 16 bits a channel when learnt), exact on every core and as fast without
+//! an FPU as with one.
 //!
-//! Memory: the read window's cells as bytes ([`MAX_CELLS`]² x
-//! [`CHANNELS`]) and the filter ([`SUPPORT`]² x [`CHANNELS`] `f32`) live in
-//! the tracker; a learning frame's spectrum and energy sum live on the
-//! stack while it learns (audit/budgets.txt).
+//! Memory: the read window's cells as bytes ([`READ`]² x 5) and the filter
+//! (`f32` and its 16-bit copy, [`SUPPORT`]² x 5 each) live in the tracker;
+//! a learning frame's spectrum and energy sum live on the stack while it
+//! learns (docs/performance.md).
 
 use super::GradientCue;
 use super::channels::{self, CHANNELS, MAX_CELLS};
-use super::filter::{exp, log_luma, sin};
+use super::filter::{exp, sin};
 use crate::cue::Cue;
 use crate::filter::{Particle, scale_estimate, shift_estimate};
 use crate::frame::Frame;
@@ -159,8 +163,15 @@ struct Seen {
 #[derive(Clone, Debug)]
 pub(crate) struct GradientFilter {
     template: Template,
-    /// `Σ` of each channel's template (for the means' share of a response).
-    sums: [Real; CHANNELS],
+    /// The template in integers, each channel scaled so that its largest
+    /// weight is ±32,767 (a window's response is then sums of integer
+    /// products, exact and alike on every core, and on cores without an
+    /// FPU as fast as on those with one): the weights, `Σ` of each
+    /// channel's weights (for the means' share of a response), and each
+    /// channel's scale back.
+    weights: [[[i16; SUPPORT]; SUPPORT]; CHANNELS],
+    sums: [i32; CHANNELS],
+    scales: [Real; CHANNELS],
     /// Whether `template` holds a learnt filter.
     learned: bool,
     /// Confident frames seen since the last one learnt.
@@ -177,10 +188,10 @@ fn cell_size((hx, hy): (Real, Real)) -> (Real, Real) {
     (2.0 * hx * WINDOW / LEARN as Real, 2.0 * hy * WINDOW / LEARN as Real)
 }
 
-/// A channel's value at a cell, as a number (grey as `ln(1 + luma)`).
+/// A channel's value at a cell, as a number.
 #[inline(always)]
-fn value(k: usize, v: u8) -> Real {
-    if k == 0 { log_luma(v) } else { v as Real }
+fn value(v: u8) -> Real {
+    v as Real
 }
 
 /// Rounds to the nearest integer (halves away from zero).
@@ -200,7 +211,9 @@ impl GradientFilter {
     pub(crate) const fn new() -> Self {
         GradientFilter {
             template: [[[0.0; SUPPORT]; SUPPORT]; CHANNELS],
-            sums: [0.0; CHANNELS],
+            weights: [[[0; SUPPORT]; SUPPORT]; CHANNELS],
+            sums: [0; CHANNELS],
+            scales: [0.0; CHANNELS],
             learned: false,
             waiting: 0,
             cells: [0; CHANNELS * READ * READ],
@@ -217,18 +230,19 @@ impl GradientFilter {
         }
         let (top, left) = (top as usize, left as usize);
         let mut out = 0.0;
-        for (k, (template, &sum)) in self.template.iter().zip(self.sums.iter()).enumerate() {
+        for (k, (weights, &sum)) in self.weights.iter().zip(self.sums.iter()).enumerate() {
             let plane = cells.get(k * n * n..(k + 1) * n * n)?;
-            let mut s = 0.0;
-            for (r, weights) in template.iter().enumerate() {
+            // At most 169 · 32,767 · 255 in magnitude: within an i32.
+            let mut acc = 0i32;
+            for (r, weights) in weights.iter().enumerate() {
                 let start = (top + r) * n + left;
                 let row = plane.get(start..start + SUPPORT)?;
                 for (&w, &v) in weights.iter().zip(row.iter()) {
-                    s += w * value(k, v);
+                    acc += w as i32 * v as i32;
                 }
             }
-            let (gain, mean) = (norm.gain.get(k).copied()?, norm.mean.get(k).copied()?);
-            out += gain * (s - mean * sum);
+            let (gain, mean, scale) = (norm.gain.get(k)?, norm.mean.get(k)?, self.scales.get(k)?);
+            out += gain * scale * (acc as Real - mean * sum as Real);
         }
         Some(out)
     }
@@ -325,11 +339,28 @@ impl GradientFilter {
         let cells = &*cells;
         let eta = if self.learned { rate } else { 1.0 };
         solve(cells, &norm, &mut self.template, eta);
-        for (sum, template) in self.sums.iter_mut().zip(self.template.iter()) {
-            *sum = template.iter().flatten().sum();
-        }
+        self.quantise();
         self.learned = true;
         self.waiting = 0;
+    }
+}
+
+impl GradientFilter {
+    /// Refreshes the integer weights from the template.
+    fn quantise(&mut self) {
+        let channels =
+            self.template.iter().zip(self.weights.iter_mut()).zip(self.sums.iter_mut()).zip(self.scales.iter_mut());
+        for (((template, weights), sum), scale) in channels {
+            let largest = template.iter().flatten().fold(0.0 as Real, |m, &w| m.max(w.abs()));
+            let to_int = if largest > 0.0 { 32_767.0 / largest } else { 0.0 };
+            *sum = 0;
+            for (t, q) in template.iter().flatten().zip(weights.iter_mut().flatten()) {
+                let w = t * to_int;
+                *q = if w >= 0.0 { (w + 0.5) as i16 } else { -((0.5 - w) as i16) };
+                *sum += *q as i32;
+            }
+            *scale = if largest > 0.0 { largest / 32_767.0 } else { 0.0 };
+        }
     }
 }
 
@@ -340,26 +371,39 @@ impl GradientFilter {
 fn normalise(cells: &[u8], n: usize, taper: Option<&[Real; LEARN]>) -> Option<Norm> {
     let mut norm = Norm::default();
     let mut energy = [0.0 as Real; CHANNELS];
-    let weight =
-        |i: usize| taper.map_or(1.0, |t| t.get(i / n).copied().unwrap_or(0.0) * t.get(i % n).copied().unwrap_or(0.0));
+    let count = n * n;
     for (k, (mean, e)) in norm.mean.iter_mut().zip(energy.iter_mut()).enumerate() {
-        let plane = cells.get(k * n * n..(k + 1) * n * n)?;
-        *mean = plane.iter().map(|&v| value(k, v)).sum::<Real>() / (n * n) as Real;
-        // A second pass: the sum of squares less the squared sum would
-        // cancel away f32's digits.
-        *e = plane
-            .iter()
-            .enumerate()
-            .map(|(i, &v)| {
-                let d = (value(k, v) - *mean) * weight(i);
-                d * d
-            })
-            .sum();
+        let plane = cells.get(k * count..(k + 1) * count)?;
+        match taper {
+            // Untapered, in integers: exact, and the squared sum cancels
+            // nothing (`count · Σv² − (Σv)²`, at most 2^43 for the largest
+            // window).
+            None => {
+                let (s1, s2) =
+                    plane.iter().fold((0u64, 0u64), |(a, b), &v| (a + v as u64, b + (v as u64) * (v as u64)));
+                *mean = s1 as Real / count as Real;
+                *e = ((count as u64 * s2 - s1 * s1) as Real) / count as Real;
+            }
+            Some(t) => {
+                *mean = plane.iter().map(|&v| value(v)).sum::<Real>() / count as Real;
+                // A second pass: the sum of squares less the squared sum
+                // would cancel away f32's digits.
+                *e = plane
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &v)| {
+                        let w = t.get(i / n).copied().unwrap_or(0.0) * t.get(i % n).copied().unwrap_or(0.0);
+                        let d = (value(v) - *mean) * w;
+                        d * d
+                    })
+                    .sum();
+            }
+        }
     }
     let [grey, orientations @ ..] = energy;
-    // Per cell: a window of one grey level leaves only f32's rounding of
+    // Per cell: a window of one grey level leaves at most f32's rounding of
     // its mean.
-    let floor = 1e-6 * (n * n) as Real;
+    let floor = 1e-6 * count as Real;
     if !(grey > floor) {
         return None;
     }
@@ -455,7 +499,7 @@ fn transform(work: &mut Spectrum, cells: &[u8], norm: &Norm, k: usize) {
         let mut line = [0.0 as Real; LEARN];
         let cells = plane.get(r * LEARN..(r + 1) * LEARN).unwrap_or(&[]);
         for ((x, &v), &tc) in line.iter_mut().zip(cells.iter()).zip(TAPER.iter()) {
-            *x = gain * (value(k, v) - mean) * tr * tc;
+            *x = gain * (value(v) - mean) * tr * tc;
         }
         let spectrum = microfft::real::rfft_32(&mut line);
         // The real FFT packs the last column's real value into the
@@ -524,10 +568,29 @@ impl Cue for GradientFilter {
         if !(c.blend > 0.0 && seen.peak > 0.0) {
             return;
         }
+        // Particles crowd a few cells: each shift near the centre is
+        // evaluated once (NaN: not yet).
+        const NEAR: i32 = 8;
+        const SIDE: usize = 2 * NEAR as usize + 1;
+        let mut near = [Real::NAN; SIDE * SIDE];
         for (p, s) in particles.iter().zip(similarities.iter_mut()).take(n) {
             let sr = round((p.y - centre.1) / seen.cell.1);
             let sc = round((p.x - centre.0) / seen.cell.0);
-            let r = self.at_shift(&seen.norm, sr, sc).map_or(0.0, |r| (r / seen.peak).max(0.0));
+            let slot = if sr.abs() <= NEAR && sc.abs() <= NEAR {
+                near.get_mut(((sr + NEAR) * SIDE as i32 + sc + NEAR) as usize)
+            } else {
+                None
+            };
+            let r = match slot {
+                Some(v) if !v.is_nan() => *v,
+                slot => {
+                    let r = self.at_shift(&seen.norm, sr, sc).map_or(0.0, |r| (r / seen.peak).max(0.0));
+                    if let Some(v) = slot {
+                        *v = r;
+                    }
+                    r
+                }
+            };
             *s = (1.0 - c.blend) * *s + c.blend * r;
         }
     }
@@ -669,22 +732,28 @@ mod tests {
     #[test]
     fn particles_on_the_target_score_higher_than_particles_off_it() {
         // Reason: the blend's purpose, on the scene's truth: the texture
-        // moved by (9, 4); particles there keep their similarity plus the
-        // blend (response over the peak, about 1), particles two boxes
-        // away gain little, and particles outside the window gain nothing.
+        // moved by (9, 4); particles there keep (1 − blend) of their
+        // similarity and gain blend times the response over the peak
+        // (about 1), particles two boxes away gain little, and particles
+        // outside the window gain nothing.
         let first = blocks(0, 0);
         let moved = blocks(9, 4);
         let mut f = GradientFilter::new();
         f.learn(&frame(&first), &target(), 1.0);
-        let mut ps = [Particle::default(); 4];
-        for (p, (x, y)) in ps.iter_mut().zip([(169.0, 124.0), (169.0, 124.0), (120.0, 90.0), (400.0, 120.0)]) {
+        // Six on the target, one two boxes away, one outside the window
+        // (the window is centred on their mean, (191.75, 119.25)).
+        let places = [(169.0, 124.0); 6].into_iter().chain([(120.0, 90.0), (400.0, 120.0)]);
+        let mut ps = [Particle::default(); 8];
+        for (p, (x, y)) in ps.iter_mut().zip(places) {
             (p.x, p.y, p.hx, p.hy) = (x, y, 16.0, 16.0);
         }
-        let mut sims = [0.5; 4];
+        let mut sims = [0.5; 8];
         let c = GradientCue::MEASURED;
-        f.rescore(&c, &frame(&moved), &ps, &mut sims, 4, (16.0, 16.0));
-        assert!(sims[0] > 0.5 + 0.8 * c.blend, "{sims:?}");
-        assert!(sims[2] < sims[0] - 0.5 * c.blend, "{sims:?}");
-        assert_eq!(sims[3], 0.5 * (1.0 - c.blend), "outside the window: {sims:?}");
+        f.rescore(&c, &frame(&moved), &ps, &mut sims, 8, (16.0, 16.0));
+        let kept = 0.5 * (1.0 - c.blend);
+        assert!(sims[0] > kept + 0.8 * c.blend, "{sims:?}");
+        assert!(sims.iter().take(6).all(|&s| s == sims[0]), "{sims:?}");
+        assert!(sims[6] < sims[0] - 0.5 * c.blend, "{sims:?}");
+        assert_eq!(sims[7], 0.5 * (1.0 - c.blend), "outside the window: {sims:?}");
     }
 }
