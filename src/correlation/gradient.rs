@@ -773,7 +773,7 @@ mod tests {
             (p.x, p.y, p.hx, p.hy) = (x, y, 16.0, 16.0);
         }
         let mut sims = [0.5; 8];
-        let c = GradientCue::MEASURED;
+        let c = GradientCue { blend: 0.3, ..GradientCue::MEASURED };
         f.rescore(&c, &frame(&moved), &ps, &mut sims, 8, (16.0, 16.0));
         let kept = 0.5 * (1.0 - c.blend);
         assert!(sims[0] > kept + 0.8 * c.blend, "{sims:?}");

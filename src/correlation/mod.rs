@@ -165,17 +165,18 @@ pub(crate) fn validate_gradient(settings: Option<GradientCue>) -> Result<(), Con
 /// `gradient` feature): grey and four gradient orientations on cells about
 /// a thirteenth of the box, learnt jointly over a window 2.5 times the box
 /// with the filter cut to the box's support (CSR-DCF's learning, Lukežič et
-/// al. 2017), read in space over a window 3.75 times the box. Each frame,
-/// its response at each particle joins the particle's similarity
-/// (`blend`), and, when its peak is clear, the estimate moves `pull` of the
-/// way to the peak and its size towards the best of three scales, as the
-/// grey-level filter's do ([`CorrelationCue`]). It is the cue that places
-/// a target by the layout of its edges where its colours are its
-/// surroundings' too.
+/// al. 2017), read in space over a window about 3.6 times the box. Each
+/// frame, when its response's peak is clear, the estimate moves `pull` of
+/// the way to the peak and its size towards the best of three scales, as
+/// the grey-level filter's do ([`CorrelationCue`]); its response at each
+/// particle may also join the particle's similarity (`blend`). It is the
+/// cue that places a target by the layout of its edges where its colours
+/// are its surroundings' too.
 ///
-/// Memory and time: about 15 KB of RAM in every tracker built with the
-/// feature (the read window's cells and the filter) and more stack on the
-/// frames it learns (audit/budgets.txt, docs/performance.md). Off in
+/// Memory and time: about 16 KB of RAM in every tracker built with the
+/// feature (the read window's cells and the filter), more stack on the
+/// frames it learns, and about twice the instructions a frame of the
+/// grey-level filter's tracker (docs/performance.md). Off in
 /// [`Config::default`](crate::Config::default); it is meant to replace the
 /// grey-level filter (`correlation: None`), though both may run.
 ///
@@ -222,8 +223,8 @@ impl GradientCue {
     /// learnt at 0.2 on every fourth frame whose confidence exceeds 0.7
     /// (a running mean as slow as 0.05 on every frame), a move 0.7 of the
     /// way to the peak and a size 0.3 of the way to the best of three
-    /// scales 3% apart when the PSR reaches 3, and a 0.3 share of each
-    /// particle's similarity.
+    /// scales 3% apart when the PSR reaches 3, and no share of the
+    /// particles' similarities (a 0.3 share loses 0.04 on the check split).
     pub const MEASURED: GradientCue = GradientCue {
         rate: 0.2,
         learn_above: 0.7,
@@ -232,6 +233,6 @@ impl GradientCue {
         scale_step: 0.03,
         scale_pull: 0.3,
         min_psr: 3.0,
-        blend: 0.3,
+        blend: 0.0,
     };
 }
