@@ -179,8 +179,6 @@ pub(crate) struct GradientFilter {
     /// The read window's cells ([`channels::read`]'s layout); the learning
     /// window's while one is learnt.
     cells: [u8; CHANNELS * READ * READ],
-    /// This frame's window, from [`Cue::rescore`].
-    seen: Option<Seen>,
 }
 
 /// Cell side for a box of half axes `(hx, hy)`, pixels.
@@ -244,7 +242,6 @@ impl GradientFilter {
             learned: false,
             waiting: 0,
             cells: [0; CHANNELS * READ * READ],
-            seen: None,
         }
     }
 
@@ -560,15 +557,15 @@ impl Cue for GradientFilter {
     fn start(&mut self, settings: Option<&GradientCue>, frame: &Frame<'_>, e: &Ellipse) {
         self.learned = false;
         self.waiting = 0;
-        self.seen = None;
         if settings.is_some() {
             self.learn(frame, e, 1.0);
         }
     }
 
-    /// Reads the window about the particles' mean, finds its response's
-    /// peak, and blends each particle's response (over the peak, negative
-    /// as 0, 0 outside the window) into its similarity.
+    /// Where [`GradientCue::blend`] asks: reads the window about the
+    /// particles' mean, finds its response's peak, and blends each
+    /// particle's response (over the peak, negative as 0, 0 outside the
+    /// window) into its similarity.
     fn rescore<const N: usize>(
         &mut self,
         c: &GradientCue,
@@ -579,8 +576,7 @@ impl Cue for GradientFilter {
         half_axes: (Real, Real),
     ) {
         let n = n.min(N);
-        self.seen = None;
-        if n == 0 {
+        if n == 0 || !(c.blend > 0.0) {
             return;
         }
         let (mut mx, mut my) = (0.0 as Real, 0.0 as Real);
@@ -588,9 +584,8 @@ impl Cue for GradientFilter {
             (mx, my) = (mx + p.x, my + p.y);
         }
         let centre = (mx / n as Real, my / n as Real);
-        self.seen = self.look(frame, centre, half_axes);
-        let Some(seen) = self.seen else { return };
-        if !(c.blend > 0.0 && seen.peak > 0.0) {
+        let Some(seen) = self.look(frame, centre, half_axes) else { return };
+        if !(seen.peak > 0.0) {
             return;
         }
         // Particles crowd a few cells: each shift near the centre is
@@ -630,7 +625,10 @@ impl Cue for GradientFilter {
         (ellipse, particles): (&mut Ellipse, &mut [Particle; N]),
         search: bool,
     ) -> Option<Real> {
-        let seen = self.seen?;
+        // The window about the estimate, where the search for the peak
+        // starts (not the particles' mean, which the blend reads: the
+        // estimate is measured the better centre, docs/accuracy.md).
+        let seen = self.look(frame, (ellipse.cx, ellipse.cy), (ellipse.hx, ellipse.hy))?;
         if seen.psr >= c.min_psr {
             let (x, y) = (seen.centre.0 + seen.at.0, seen.centre.1 + seen.at.1);
             let (dx, dy) = (c.pull * (x - ellipse.cx), c.pull * (y - ellipse.cy));
