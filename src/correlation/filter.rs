@@ -68,14 +68,16 @@ type Spectrum = [[Complex32; COLS]; GRID];
 /// compile time.
 const TAPER: [Real; GRID] = taper();
 
+/// The Hann taper `sin²(π (i + ½) / N)` of an axis of `N` lattice points
+/// (this filter's and the gradient filter's tables).
 // Evaluated at compile time only (for a `const`): an index out of range
 // would stop the build, never the device.
 #[allow(clippy::indexing_slicing)]
-const fn taper() -> [Real; GRID] {
-    let mut out = [0.0; GRID];
+pub(super) const fn taper<const N: usize>() -> [Real; N] {
+    let mut out = [0.0; N];
     let mut i = 0;
-    while i < GRID {
-        let s = sin(core::f64::consts::PI * (i as f64 + 0.5) / GRID as f64);
+    while i < N {
+        let s = sin(core::f64::consts::PI * (i as f64 + 0.5) / N as f64);
         out[i] = (s * s) as Real;
         i += 1;
     }
@@ -86,22 +88,25 @@ const fn taper() -> [Real; GRID] {
 /// point 0, wrapped) along one axis, computed at compile time: the peak is
 /// real and even, so its spectrum is real, `Σₖ g(k) cos(2π u k / GRID)`,
 /// and the 2-D spectrum is separable, `PEAK[u] · PEAK[v]`.
-const PEAK: [Real; GRID] = peak();
+const PEAK: [Real; GRID] = peak(PEAK_SIGMA);
 
+/// The spectrum of a Gaussian peak of σ `sigma` lattice points at point 0
+/// (wrapped) along an axis of `N` points (this filter's and the gradient
+/// filter's tables).
 // Evaluated at compile time only (for a `const`): an index out of range
 // would stop the build, never the device.
 #[allow(clippy::indexing_slicing)]
-const fn peak() -> [Real; GRID] {
-    let mut out = [0.0; GRID];
+pub(super) const fn peak<const N: usize>(sigma: f64) -> [Real; N] {
+    let mut out = [0.0; N];
     let mut u = 0;
-    while u < GRID {
+    while u < N {
         let mut sum = 0.0;
         let mut k = 0;
-        while k < GRID {
+        while k < N {
             // Distances past the middle count from the other end (wrapped).
-            let d = if k < GRID - k { k } else { GRID - k } as f64;
-            let g = 1.0 / exp(d * d / (2.0 * PEAK_SIGMA * PEAK_SIGMA));
-            let turn = ((u * k) % GRID) as f64 / GRID as f64;
+            let d = if k < N - k { k } else { N - k } as f64;
+            let g = 1.0 / exp(d * d / (2.0 * sigma * sigma));
+            let turn = ((u * k) % N) as f64 / N as f64;
             // cos θ = sin(θ + π/2).
             sum += g * sin(core::f64::consts::TAU * turn + core::f64::consts::FRAC_PI_2);
             k += 1;
@@ -136,7 +141,7 @@ pub(super) const fn sin(a: f64) -> f64 {
 
 /// `exp(x)` for `0 ≤ x ≤ 64`, at compile time only: `exp(x / 64)` by
 /// its series (twelve terms for an argument at most 1), squared six times.
-pub(super) const fn exp(x: f64) -> f64 {
+const fn exp(x: f64) -> f64 {
     let y = x / 64.0;
     let (mut term, mut sum, mut k) = (1.0, 1.0, 1);
     while k < 12 {
@@ -511,7 +516,7 @@ fn transform_columns(work: &mut Spectrum, fft: fn(&mut [Complex32; GRID]) -> &mu
 }
 
 /// `ln(1 + l)`, from the table.
-pub(super) fn log_luma(l: u8) -> Real {
+fn log_luma(l: u8) -> Real {
     LOG_LUMA.get(l as usize).copied().unwrap_or(0.0)
 }
 

@@ -33,7 +33,7 @@
 
 use super::GradientCue;
 use super::channels::{self, CHANNELS, MAX_CELLS};
-use super::filter::{exp, sin};
+use super::filter::{peak, sin, taper};
 use crate::cue::Cue;
 use crate::filter::{Particle, scale_estimate, shift_estimate};
 use crate::frame::Frame;
@@ -68,22 +68,8 @@ type Spectrum = [[Complex32; COLS]; LEARN];
 /// The filter in space, per channel, row by row.
 type Template = [[[Real; SUPPORT]; SUPPORT]; CHANNELS];
 
-/// The Hann taper `sin²(π (i + ½) / LEARN)`, computed at compile time.
+/// The Hann taper of the learning lattice, computed at compile time.
 const TAPER: [Real; LEARN] = taper();
-
-// Evaluated at compile time only (for a `const`): an index out of range
-// would stop the build, never the device.
-#[allow(clippy::indexing_slicing)]
-const fn taper() -> [Real; LEARN] {
-    let mut out = [0.0; LEARN];
-    let mut i = 0;
-    while i < LEARN {
-        let s = sin(core::f64::consts::PI * (i as f64 + 0.5) / LEARN as f64);
-        out[i] = (s * s) as Real;
-        i += 1;
-    }
-    out
-}
 
 /// The weight of a shift in the read window: the Hann taper of a window
 /// twice the learning window's side (`2 · LEARN` cells, 5 times the box) at
@@ -110,30 +96,9 @@ const fn shift_weight() -> [Real; READ] {
 }
 
 /// The spectrum of the Gaussian peak at lattice point 0 (wrapped) along one
-/// axis (real and even, so real; the 2-D one is `PEAK[u] · PEAK[v]`).
-const PEAK: [Real; LEARN] = peak();
-
-// Evaluated at compile time only (for a `const`): an index out of range
-// would stop the build, never the device.
-#[allow(clippy::indexing_slicing)]
-const fn peak() -> [Real; LEARN] {
-    let mut out = [0.0; LEARN];
-    let mut u = 0;
-    while u < LEARN {
-        let mut sum = 0.0;
-        let mut k = 0;
-        while k < LEARN {
-            let d = if k < LEARN - k { k } else { LEARN - k } as f64;
-            let g = 1.0 / exp(d * d / (2.0 * PEAK_SIGMA * PEAK_SIGMA));
-            let turn = ((u * k) % LEARN) as f64 / LEARN as f64;
-            sum += g * sin(core::f64::consts::TAU * turn + core::f64::consts::FRAC_PI_2);
-            k += 1;
-        }
-        out[u] = sum as Real;
-        u += 1;
-    }
-    out
-}
+/// axis of the learning lattice (real and even, so real; the 2-D one is
+/// `PEAK[u] · PEAK[v]`), computed at compile time.
+const PEAK: [Real; LEARN] = peak(PEAK_SIGMA);
 
 /// How a window's cells are normalised: channel `k`'s value `v` counts as
 /// `gain[k] · (v − mean[k])` (grey as `ln(1 + luma)`).

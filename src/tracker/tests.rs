@@ -213,6 +213,27 @@ fn the_correlation_filter_needs_its_feature_and_sane_settings() {
     }
 }
 
+/// Frame `t` of a scene colour cannot place: grey 64 or 95 in random 8x8
+/// blocks (one RGB bin), the texture panning 2 px right and 1 px down a
+/// frame, so that the content boxed by [`BOX`] in frame 0 is centred at
+/// `(60 + 2t, 45 + t)` in frame `t`.
+#[cfg(feature = "correlation")]
+fn panning_texture() -> impl Fn(usize) -> Vec<u8> {
+    let mut next = crate::testing::lcg(11);
+    let (bw, bh) = (W / 8 + 4, H / 8 + 4);
+    let levels: Vec<u8> = (0..bw * bh).map(|_| if next() >> 31 == 1 { 95 } else { 64 }).collect();
+    move |t: usize| {
+        let mut px = vec![0u8; W * H * 3];
+        for y in 0..H {
+            for x in 0..W {
+                let (u, v) = (x + 24 - 2 * t, y + 24 - t);
+                px[(y * W + x) * 3..][..3].fill(levels[(v / 8) * bw + u / 8]);
+            }
+        }
+        px
+    }
+}
+
 #[cfg(feature = "correlation")]
 #[test]
 fn the_correlation_filter_follows_a_texture_colour_cannot_place() {
@@ -223,19 +244,7 @@ fn the_correlation_filter_follows_a_texture_colour_cannot_place() {
     // is centred at (60 + 2t, 45 + t) in frame t. The filter sees the
     // layout of light and dark and places the box within 2 px (half of
     // its window's 4-px cells, after the sub-cell fit).
-    let mut next = crate::testing::lcg(11);
-    let (bw, bh) = (W / 8 + 4, H / 8 + 4);
-    let levels: Vec<u8> = (0..bw * bh).map(|_| if next() >> 31 == 1 { 95 } else { 64 }).collect();
-    let scene = |t: usize| {
-        let mut px = vec![0u8; W * H * 3];
-        for y in 0..H {
-            for x in 0..W {
-                let (u, v) = (x + 24 - 2 * t, y + 24 - t);
-                px[(y * W + x) * 3..][..3].fill(levels[(v / 8) * bw + u / 8]);
-            }
-        }
-        px
-    };
+    let scene = panning_texture();
     let cfg = Config { edges: None, correlation: Some(CorrelationCue::MEASURED), ..Config::default() };
     let mut t: Tracker<60> = Tracker::new(cfg, 1).unwrap();
     t.init(&frame(&scene(0)), BOX).unwrap();
@@ -534,19 +543,7 @@ fn the_gradient_filter_follows_a_texture_colour_cannot_place() {
     // texture panning 2 px right and 1 px down a frame, so the content
     // first boxed is centred at (60 + 2t, 45 + t) in frame t. The
     // gradient filter, alone beside colour, places the box within 2 px.
-    let mut next = crate::testing::lcg(11);
-    let (bw, bh) = (W / 8 + 4, H / 8 + 4);
-    let levels: Vec<u8> = (0..bw * bh).map(|_| if next() >> 31 == 1 { 95 } else { 64 }).collect();
-    let scene = |t: usize| {
-        let mut px = vec![0u8; W * H * 3];
-        for y in 0..H {
-            for x in 0..W {
-                let (u, v) = (x + 24 - 2 * t, y + 24 - t);
-                px[(y * W + x) * 3..][..3].fill(levels[(v / 8) * bw + u / 8]);
-            }
-        }
-        px
-    };
+    let scene = panning_texture();
     let cfg =
         Config { edges: None, correlation: None, gradient: Some(crate::GradientCue::MEASURED), ..Config::default() };
     let mut t: Tracker<60> = Tracker::new(cfg, 1).unwrap();
