@@ -554,7 +554,7 @@ impl RowReader for WindowRow<'_, '_> {
 
 /// The offset, in `(−½, ½)` cells, of the vertex of the parabola through a
 /// peak and its two neighbours; 0 where they are flat.
-fn sub_cell(left: Real, peak: Real, right: Real) -> Real {
+pub(super) fn sub_cell(left: Real, peak: Real, right: Real) -> Real {
     let curvature = left - 2.0 * peak + right;
     if curvature < 0.0 { crate::scalar::clamp(0.5 * (left - right) / curvature, -0.5, 0.5) } else { 0.0 }
 }

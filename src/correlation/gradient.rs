@@ -33,7 +33,7 @@
 
 use super::GradientCue;
 use super::channels::{self, CHANNELS, MAX_CELLS};
-use super::filter::{peak, sin, taper};
+use super::filter::{peak, sin, sub_cell, taper};
 use crate::cue::Cue;
 use crate::filter::{Particle, scale_estimate, shift_estimate};
 use crate::frame::Frame;
@@ -187,13 +187,6 @@ const _: () = assert!(SUPPORT == 13);
 /// Rounds to the nearest integer (halves away from zero).
 fn round(v: Real) -> i32 {
     if v >= 0.0 { (v + 0.5) as i32 } else { -((0.5 - v) as i32) }
-}
-
-/// The offset, in `(−½, ½)` cells, of the vertex of the parabola through a
-/// peak and its two neighbours; 0 where they are flat.
-fn sub_cell(left: Real, peak: Real, right: Real) -> Real {
-    let curvature = left - 2.0 * peak + right;
-    if curvature < 0.0 { crate::scalar::clamp(0.5 * (left - right) / curvature, -0.5, 0.5) } else { 0.0 }
 }
 
 impl GradientFilter {
