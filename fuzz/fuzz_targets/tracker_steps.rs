@@ -5,14 +5,14 @@
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 use pftrack::{
-    Binning, BoundaryCue, BoundingBox, Config, Frame, MeanShift, MeanShiftConfig, ModelUpdate, PixelFormat, Redetect,
-    ScalePrior, Shape, Similarity, TableMode, Tracker,
+    Binning, BoundaryCue, BoundingBox, Config, Frame, GradientCue, MeanShift, MeanShiftConfig, ModelUpdate, PixelFormat,
+    Redetect, ScalePrior, Shape, Similarity, TableMode, Tracker,
 };
 use rand_xoshiro::Xoshiro128PlusPlus;
 
 fn config(pick: u8) -> Config {
     let d = Config::default();
-    match pick % 11 {
+    match pick % 13 {
         0 => d,
         1 => Config { quadrants: true, binning: Binning::Rgb4x4x4, ..d },
         2 => Config { quadrants: true, binning: Binning::Adaptive, ..d },
@@ -23,6 +23,10 @@ fn config(pick: u8) -> Config {
         7 => Config { scene_motion: !d.scene_motion, ..d },
         8 => Config { sure_share: 0.3, ..d },
         9 => Config { redetect: Redetect::Frame, ..d },
+        // The gradient filter in place of the grey-level one, and beside
+        // it with its response blended into the particles' similarities.
+        10 => Config { gradient: Some(GradientCue::MEASURED), correlation: None, ..d },
+        11 => Config { gradient: Some(GradientCue { blend: 0.3, ..GradientCue::MEASURED }), ..d },
         _ => Config { table: Some(TableMode { spacing: 1 }), ..d },
     }
 }
