@@ -323,9 +323,7 @@ impl GradientFilter {
         self.learned = true;
         self.waiting = 0;
     }
-}
 
-impl GradientFilter {
     /// Refreshes the integer weights from the template.
     fn quantise(&mut self) {
         let channels =
