@@ -4,7 +4,8 @@
 //! on nothing but the core and the fixture codecs, so it also builds for an
 //! ARMv6 Linux device (see the README).
 //!
-//! Usage: pftrack-trace FIXTURE [SEED [pf|pf-sure|colour|meanshift|kalman]]
+//! Usage: pftrack-trace FIXTURE [SEED [pf|pf-sure|colour|meanshift|kalman|pf-gradient]]
+//! (`pf-gradient` in a build with the `gradient` feature)
 //!
 //! A fixture of several targets is tracked by a group of them all (the
 //! particle filter; mean shift follows one target), one line per target
@@ -53,6 +54,8 @@ fn run(path: &str, seed: u64, kind: &str) -> Result<(), String> {
     let h = Header::parse(&head).map_err(|e| e.to_string())?;
     let ms_config = match kind {
         "pf" | "pf-sure" | "colour" => None,
+        #[cfg(feature = "gradient")]
+        "pf-gradient" => None,
         "meanshift" => Some(MeanShiftConfig::default()),
         "kalman" => Some(MeanShiftConfig::kalman()),
         _ => return Err(format!("tracker `{kind}` is not pf, pf-sure, colour, meanshift or kalman")),
@@ -64,6 +67,11 @@ fn run(path: &str, seed: u64, kind: &str) -> Result<(), String> {
     let config = match kind {
         "colour" => Config { correlation: None, ..Config::default() },
         "pf-sure" => Config { sure_share: 0.6, ..Config::default() },
+        // As the firmware's `pf-gradient` tracker (its `gradient` feature).
+        #[cfg(feature = "gradient")]
+        "pf-gradient" => {
+            Config { gradient: Some(pftrack::GradientCue::MEASURED), correlation: None, ..Config::default() }
+        }
         _ => Config::default(),
     };
     if h.targets > 1 {
