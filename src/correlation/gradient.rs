@@ -11,25 +11,29 @@
 //! the box's support** ([`SUPPORT`] x [`SUPPORT`] cells) and kept as a
 //! running mean of such cut filters. Cutting is what lets the window be
 //! wide: the filter learns the target against its surroundings without
-//! answering to them (the boundary effects BACF and CSR-DCF remove).
+//! answering to them (the boundary effects BACF and CSR-DCF remove). The
+//! learning window is taken from the cells this frame's search read where
+//! it lies within them (to the nearest cell), so that learning reads no
+//! pixels of its own.
 //!
 //! Reading is in space, where the cut filter is small: the response at a
 //! shift is the sum over channels and support cells of the filter times the
 //! window's cells (normalised as learnt, over the whole read window),
 //! weighted by how far the shift is from the window's centre. It is
-//! evaluated where it is needed: on a coarse grid of shifts every
-//! [`COARSE`] cells and about its best one, for the peak and its
-//! peak-to-sidelobe ratio, and, where [`GradientCue::blend`] asks, at each
+//! evaluated where it is needed: at every shift of the 2 x 2-pooled filter
+//! over the 2 x 2-pooled cells (a smoothed response on every second shift,
+//! at a quarter of the products; its peak-to-sidelobe ratio is the
+//! filter's), then at full resolution about the pooled peak, climbing to
+//! the best shift; and, where [`GradientCue::blend`] asks, at each
 //! particle. No response FFT runs, and only the learning frames transform
 //! (every [`GradientCue::learn_every`]-th confident frame). The sums are
-//! of integer products (the cells are bytes, the filter is rounded to
-//! 16 bits a channel when learnt), exact on every core and as fast without
-//! an FPU as with one.
+//! of integer products (the cells are bytes, the filter is kept in 16 bits
+//! a channel), exact on every core and as fast without an FPU as with one.
 //!
 //! Memory: the read window's cells as bytes ([`READ`]² x 5) and the filter
-//! (`f32` and its 16-bit copy, [`SUPPORT`]² x 5 each) live in the tracker;
-//! a learning frame's spectrum and energy sum live on the stack while it
-//! learns (docs/performance.md).
+//! (16 bits a weight and a scale per channel, [`SUPPORT`]² x 5 weights)
+//! live in the tracker; a learning frame's spectrum and energy sum live on
+//! the stack while it learns (docs/performance.md).
 
 use super::GradientCue;
 use super::channels::{self, CHANNELS, MAX_CELLS};
@@ -56,17 +60,29 @@ const WINDOW: Real = 2.5;
 /// (grey, and the orientations together), so a bin of `Σ |X|²` averages
 /// about 2 by Parseval; λ = 0.1 keeps weak frequencies from dominating.
 const LAMBDA: Real = 0.1;
-/// The coarse search's step, in cells.
-const COARSE: i32 = 2;
+/// The pooled read lattice's side: 2 x 2 cells to a pooled cell.
+const POOLED: usize = READ / 2;
+/// The pooled filter's side (the support and a row and column of zeros).
+const POOLED_SUPPORT: usize = SUPPORT.div_ceil(2);
+/// How far, relatively, the learning window's cells may differ in size
+/// from the read window's for it to be taken from there.
+const SAME_CELL: Real = 0.03;
+/// How many times the search about the coarse best may move to a
+/// better neighbour.
+const CLIMB: usize = 4;
 /// The σ of the Gaussian peak the filter is trained to answer with, in cells.
 const PEAK_SIGMA: f64 = 1.0;
 /// The half spectrum's columns: 0 to `LEARN / 2`.
 const COLS: usize = LEARN / 2 + 1;
 
-/// Half a spectrum of the learning lattice.
-type Spectrum = [[Complex32; COLS]; LEARN];
-/// The filter in space, per channel, row by row.
-type Template = [[[Real; SUPPORT]; SUPPORT]; CHANNELS];
+/// Half a spectrum of the learning lattice, column by column: `[v][u]`
+/// holds horizontal frequency `v` (0 to `LEARN / 2`) and vertical frequency
+/// `u`, so that each column transforms in place.
+type Spectrum = [[Complex32; LEARN]; COLS];
+/// One channel's filter in space, row by row.
+type Cut = [[Real; SUPPORT]; SUPPORT];
+/// A number per bin of the half spectrum, laid out as [`Spectrum`].
+type Bins = [[Real; LEARN]; COLS];
 
 /// The Hann taper of the learning lattice, computed at compile time.
 const TAPER: [Real; LEARN] = taper();
@@ -108,6 +124,31 @@ struct Norm {
     mean: [Real; CHANNELS],
 }
 
+/// An `n` x `n` square of cells in a buffer of [`CHANNELS`] planes of
+/// `side` x `side` cells ([`channels::read`]'s layout), from cell
+/// `(top, left)`.
+#[derive(Copy, Clone)]
+struct Lattice<'a> {
+    cells: &'a [u8],
+    side: usize,
+    top: usize,
+    left: usize,
+    n: usize,
+}
+
+impl<'a> Lattice<'a> {
+    /// All `n` x `n` cells of `cells`.
+    fn whole(cells: &'a [u8], n: usize) -> Self {
+        Lattice { cells, side: n, top: 0, left: 0, n }
+    }
+
+    /// Row `r` of channel `k` (empty outside the buffer).
+    fn row(&self, k: usize, r: usize) -> &'a [u8] {
+        let start = (k * self.side + self.top + r) * self.side + self.left;
+        self.cells.get(start..start + self.n).unwrap_or(&[])
+    }
+}
+
 /// What this frame's window showed: where it was, and where its response
 /// peaks.
 #[derive(Copy, Clone, Debug)]
@@ -127,20 +168,22 @@ struct Seen {
 /// memory for one window's cells.
 #[derive(Clone, Debug)]
 pub(crate) struct GradientFilter {
-    template: Template,
-    /// The template in integers, each channel scaled so that its largest
-    /// weight is ±32,767 (a window's response is then sums of integer
-    /// products, exact and alike on every core, and on cores without an
-    /// FPU as fast as on those with one): the weights, `Σ` of each
-    /// channel's weights (for the means' share of a response), and each
-    /// channel's scale back.
+    /// The running mean of cut filters in integers, each channel scaled so
+    /// that its largest weight is ±32,767 (a window's response is then
+    /// sums of integer products, exact and alike on every core, and on
+    /// cores without an FPU as fast as on those with one): the weights,
+    /// `Σ` of each channel's weights (for the means' share of a response),
+    /// and each channel's scale back.
     weights: [[[i16; SUPPORT]; SUPPORT]; CHANNELS],
     sums: [i32; CHANNELS],
     scales: [Real; CHANNELS],
-    /// Whether `template` holds a learnt filter.
+    /// Whether the weights hold a learnt filter.
     learned: bool,
     /// Confident frames seen since the last one learnt.
     waiting: u16,
+    /// Where `cells` holds this frame's read window: its centre and cell
+    /// size (cleared once the frame is adapted to).
+    window: Option<((Real, Real), (Real, Real))>,
     /// The read window's cells ([`channels::read`]'s layout); the learning
     /// window's while one is learnt.
     cells: [u8; CHANNELS * READ * READ],
@@ -184,6 +227,19 @@ fn dot(w: &[i16; SUPPORT], v: &[u8; SUPPORT]) -> i32 {
 // `dot` is written for this support.
 const _: () = assert!(SUPPORT == 13);
 
+/// [`dot`] for the pooled filter's rows.
+#[inline(always)]
+fn pooled_dot(w: &[i32; POOLED_SUPPORT], v: &[u8; POOLED_SUPPORT]) -> i32 {
+    let [w0, w1, w2, w3, w4, w5, w6] = *w;
+    let [v0, v1, v2, v3, v4, v5, v6] = *v;
+    let p = |w: i32, v: u8| w * v as i32;
+    p(w0, v0) + p(w1, v1) + p(w2, v2) + p(w3, v3) + p(w4, v4) + p(w5, v5) + p(w6, v6)
+}
+
+// `pooled_dot` is written for this support; the pooled lattice and the
+// padded filter's origin are whole pooled cells.
+const _: () = assert!(POOLED_SUPPORT == 7 && READ.is_multiple_of(2) && (READ / 2 - HALF - 1).is_multiple_of(2));
+
 /// Rounds to the nearest integer (halves away from zero).
 fn round(v: Real) -> i32 {
     if v >= 0.0 { (v + 0.5) as i32 } else { -((0.5 - v) as i32) }
@@ -193,12 +249,12 @@ impl GradientFilter {
     /// An empty filter (it answers nothing until it has learnt a window).
     pub(crate) const fn new() -> Self {
         GradientFilter {
-            template: [[[0.0; SUPPORT]; SUPPORT]; CHANNELS],
             weights: [[[0; SUPPORT]; SUPPORT]; CHANNELS],
             sums: [0; CHANNELS],
             scales: [0.0; CHANNELS],
             learned: false,
             waiting: 0,
+            window: None,
             cells: [0; CHANNELS * READ * READ],
         }
     }
@@ -235,6 +291,74 @@ impl GradientFilter {
         Some(self.response(&self.cells, READ, norm, origin + sr, origin + sc)? * weight(sr) * weight(sc))
     }
 
+    /// The coarse search: the response of the 2 x 2-pooled filter to the
+    /// read window's 2 x 2-pooled cells at every pooled shift, weighted as
+    /// [`Self::at_shift`] weights the shift it stands for. The best pooled
+    /// shift (in pooled cells from the centre) and the peak-to-sidelobe
+    /// ratio over all of them.
+    fn coarse(&self, norm: &Norm) -> Option<((i32, i32), Real)> {
+        // Pooled cell `p` holds the window's cells `2p` and `2p + 1`; the
+        // filter is padded with a row and a column of zeros before its
+        // first, so that at an even shift its padded top-left cell starts
+        // a pooled cell.
+        const ORIGIN: usize = (READ / 2 - HALF - 1) / 2;
+        let mut cells = [0u8; CHANNELS * POOLED * POOLED];
+        for (k, pooled) in cells.chunks_exact_mut(POOLED * POOLED).enumerate() {
+            let plane = self.cells.get(k * READ * READ..(k + 1) * READ * READ)?;
+            for (r, out) in pooled.chunks_exact_mut(POOLED).enumerate() {
+                let (a, b) = (plane.get(2 * r * READ..)?, plane.get((2 * r + 1) * READ..)?);
+                for (c, v) in out.iter_mut().enumerate() {
+                    let cell = |row: &[u8], i: usize| row.get(i).copied().unwrap_or(0) as u16;
+                    let sum = cell(a, 2 * c) + cell(a, 2 * c + 1) + cell(b, 2 * c) + cell(b, 2 * c + 1);
+                    *v = ((sum + 2) >> 2) as u8;
+                }
+            }
+        }
+        let mut weights = [[[0i32; POOLED_SUPPORT]; POOLED_SUPPORT]; CHANNELS];
+        for (pooled, full) in weights.iter_mut().zip(self.weights.iter()) {
+            // Row and column `r` of the filter are `r + 1` of the padded
+            // one, in pooled cell `(r + 1) / 2`.
+            for (r, row) in full.iter().enumerate() {
+                let Some(out) = pooled.get_mut(r.div_ceil(2)) else { continue };
+                for (c, &w) in row.iter().enumerate() {
+                    if let Some(v) = out.get_mut(c.div_ceil(2)) {
+                        *v += w as i32;
+                    }
+                }
+            }
+        }
+        let span = ORIGIN as i32;
+        let weight = |t: i32| SHIFT_WEIGHT.get((2 * t + (READ / 2) as i32) as usize).copied().unwrap_or(0.0);
+        let (mut best, mut at) = (Real::MIN, (0, 0));
+        let (mut s1, mut s2, mut count) = (0.0 as Real, 0.0 as Real, 0u32);
+        for tr in -span..=span {
+            for tc in -span..=span {
+                let (top, left) = ((ORIGIN as i32 + tr) as usize, (ORIGIN as i32 + tc) as usize);
+                let mut out = 0.0;
+                for (k, (weights, &sum)) in weights.iter().zip(self.sums.iter()).enumerate() {
+                    let plane = cells.get(k * POOLED * POOLED..(k + 1) * POOLED * POOLED)?;
+                    // At most 49 · 4 · 32,767 · 255 in magnitude: within an i32.
+                    let mut acc = 0i32;
+                    for (r, weights) in weights.iter().enumerate() {
+                        let start = (top + r) * POOLED + left;
+                        let row: &[u8; POOLED_SUPPORT] = plane.get(start..start + POOLED_SUPPORT)?.try_into().ok()?;
+                        acc += pooled_dot(weights, row);
+                    }
+                    let (gain, mean, scale) = (norm.gain.get(k)?, norm.mean.get(k)?, self.scales.get(k)?);
+                    out += gain * scale * (acc as Real - mean * sum as Real);
+                }
+                let v = out * weight(tr) * weight(tc);
+                (s1, s2, count) = (s1 + v, s2 + v * v, count + 1);
+                if v > best {
+                    (best, at) = (v, (tr, tc));
+                }
+            }
+        }
+        let mean = s1 / count as Real;
+        let sd = sqrt((s2 / count as Real - mean * mean).max(0.0));
+        Some((at, if sd > 0.0 { (best - mean) / sd } else { 0.0 }))
+    }
+
     /// Reads the window around `centre` for a box of half axes `half_axes`
     /// and finds its response's peak; `None` before anything is learnt, or
     /// for a window of one grey level.
@@ -243,50 +367,59 @@ impl GradientFilter {
             return None;
         }
         let cell = cell_size(half_axes);
+        self.window = None;
         if !channels::read(frame, centre, cell, READ, &mut self.cells) {
             return None;
         }
-        let norm = normalise(&self.cells, READ, None)?;
-        // The coarse grid, for the peak's neighbourhood and the sidelobes.
-        let reach = (READ / 2 - HALF) as i32 - 1;
-        let span = reach / COARSE * COARSE;
-        let (mut best, mut at) = (Real::MIN, (0, 0));
-        let (mut s1, mut s2, mut count) = (0.0 as Real, 0.0 as Real, 0u32);
-        let mut sr = -span;
-        while sr <= span {
-            let mut sc = -span;
-            while sc <= span {
-                if let Some(v) = self.at_shift(&norm, sr, sc) {
-                    (s1, s2, count) = (s1 + v, s2 + v * v, count + 1);
-                    if v > best {
-                        (best, at) = (v, (sr, sc));
+        self.window = Some((centre, cell));
+        let norm = normalise(Lattice::whole(&self.cells, READ), None)?;
+        // The coarse search, on 2 x 2-pooled cells and weights: each pooled
+        // shift answers for the four shifts it covers (a smoothed response
+        // sampled every second shift, so that a sharp peak between the
+        // samples is not missed), at a quarter of the products.
+        let (coarse, psr) = self.coarse(&norm)?;
+        // Then every shift about the coarse best, climbing while the best
+        // is on the edge of those evaluated.
+        let mut at = (2 * coarse.0, 2 * coarse.1);
+        let mut best = self.at_shift(&norm, at.0, at.1)?;
+        // The 3 x 3 shifts about `at` (outside the window: the least).
+        let mut around = [[Real::MIN; 3]; 3];
+        let mut settled = false;
+        for _ in 0..CLIMB {
+            let (r0, c0) = at;
+            let mut moved = (0, 0);
+            for (i, row) in around.iter_mut().enumerate() {
+                for (j, v) in row.iter_mut().enumerate() {
+                    let (dr, dc) = (i as i32 - 1, j as i32 - 1);
+                    *v = if (dr, dc) == (0, 0) {
+                        best
+                    } else {
+                        self.at_shift(&norm, r0 + dr, c0 + dc).unwrap_or(Real::MIN)
+                    };
+                    if *v > best {
+                        (best, moved) = (*v, (dr, dc));
                     }
                 }
-                sc += COARSE;
             }
-            sr += COARSE;
-        }
-        // Then every shift within a coarse step of the best.
-        let (r0, c0) = at;
-        for sr in r0 - (COARSE - 1)..=r0 + (COARSE - 1) {
-            for sc in c0 - (COARSE - 1)..=c0 + (COARSE - 1) {
-                if let Some(v) = self.at_shift(&norm, sr, sc)
-                    && v > best
-                {
-                    (best, at) = (v, (sr, sc));
-                }
+            if moved == (0, 0) {
+                settled = true;
+                break;
             }
+            at = (r0 + moved.0, c0 + moved.1);
         }
-        if count == 0 {
-            return None;
-        }
+        // The sub-cell fit from the best's neighbours (those evaluated
+        // last, unless the climb ran out while still moving).
         let (r, c) = at;
-        let near = |sr, sc| self.at_shift(&norm, sr, sc).unwrap_or(best);
-        let dr = sub_cell(near(r - 1, c), best, near(r + 1, c));
-        let dc = sub_cell(near(r, c - 1), best, near(r, c + 1));
-        let mean = s1 / count as Real;
-        let sd = sqrt((s2 / count as Real - mean * mean).max(0.0));
-        let psr = if sd > 0.0 { (best - mean) / sd } else { 0.0 };
+        let near = |i: usize, j: usize| {
+            let v = if settled {
+                around.get(i).and_then(|row| row.get(j)).copied()
+            } else {
+                self.at_shift(&norm, r + i as i32 - 1, c + j as i32 - 1)
+            };
+            v.filter(|&v| v > Real::MIN).unwrap_or(best)
+        };
+        let dr = sub_cell(near(0, 1), best, near(2, 1));
+        let dc = sub_cell(near(1, 0), best, near(1, 2));
         Some(Seen { centre, cell, norm, peak: best, at: ((c as Real + dc) * cell.0, (r as Real + dr) * cell.1), psr })
     }
 
@@ -303,7 +436,7 @@ impl GradientFilter {
         if !channels::read(frame, (e.cx, e.cy), (cell.0 * scale, cell.1 * scale), N, &mut cells) {
             return None;
         }
-        let norm = normalise(&cells, N, None)?;
+        let norm = normalise(Lattice::whole(&cells, N), None)?;
         self.response(&cells, N, &norm, (N / 2 - HALF) as i32, (N / 2 - HALF) as i32)
     }
 
@@ -311,70 +444,129 @@ impl GradientFilter {
     /// whole, whatever the rate).
     fn learn(&mut self, frame: &Frame<'_>, e: &Ellipse, rate: Real) {
         let cell = cell_size((e.hx, e.hy));
-        let Some(cells) = self.cells.get_mut(..CHANNELS * LEARN * LEARN) else { return };
-        if !channels::read(frame, (e.cx, e.cy), cell, LEARN, cells) {
-            return;
+        let lattice = match self.window.take().and_then(|w| within(w, e, cell)) {
+            Some((top, left)) => Lattice { cells: &self.cells, side: READ, top, left, n: LEARN },
+            None => {
+                let Some(cells) = self.cells.get_mut(..CHANNELS * LEARN * LEARN) else { return };
+                if !channels::read(frame, (e.cx, e.cy), cell, LEARN, cells) {
+                    return;
+                }
+                Lattice::whole(cells, LEARN)
+            }
+        };
+        let Some(norm) = normalise(lattice, Some(&TAPER)) else { return };
+        let cells = lattice;
+        // Each channel is transformed twice (once for the energy sum, once
+        // for its own solve) rather than all kept, so that one spectrum is
+        // on the stack at a time; all but the last.
+        let mut work: Spectrum = [[Complex32::new(0.0, 0.0); LEARN]; COLS];
+        let mut gain: Bins = [[LAMBDA; LEARN]; COLS];
+        for k in 0..CHANNELS {
+            transform(&mut work, cells, &norm, k);
+            for (gain, col) in gain.iter_mut().zip(work.iter()) {
+                for (e, x) in gain.iter_mut().zip(col.iter()) {
+                    *e += x.re * x.re + x.im * x.im;
+                }
+            }
         }
-        let Some(norm) = normalise(cells, LEARN, Some(&TAPER)) else { return };
-        let cells = &*cells;
+        // The trained peak's spectrum over the energy, once for all
+        // channels.
+        for (col, &pv) in gain.iter_mut().zip(PEAK.iter()) {
+            for (e, &pu) in col.iter_mut().zip(PEAK.iter()) {
+                *e = pu * pv / *e;
+            }
+        }
         let eta = if self.learned { rate } else { 1.0 };
-        solve(cells, &norm, &mut self.template, eta);
-        self.quantise();
+        let mut cut: Cut = [[0.0; SUPPORT]; SUPPORT];
+        // The last channel transformed is still in `work`: solved first.
+        for k in (0..CHANNELS).rev().take(1).chain(0..CHANNELS - 1) {
+            if k + 1 < CHANNELS {
+                transform(&mut work, cells, &norm, k);
+            }
+            solve(&mut work, &gain, &mut cut);
+            if let (Some(weights), Some(sum), Some(scale)) =
+                (self.weights.get_mut(k), self.sums.get_mut(k), self.scales.get_mut(k))
+            {
+                blend((weights, sum, scale), &cut, eta);
+            }
+        }
         self.learned = true;
         self.waiting = 0;
     }
+}
 
-    /// Refreshes the integer weights from the template.
-    fn quantise(&mut self) {
-        let channels =
-            self.template.iter().zip(self.weights.iter_mut()).zip(self.sums.iter_mut()).zip(self.scales.iter_mut());
-        for (((template, weights), sum), scale) in channels {
-            let largest = template.iter().flatten().fold(0.0 as Real, |m, &w| m.max(w.abs()));
-            let to_int = if largest > 0.0 { 32_767.0 / largest } else { 0.0 };
-            *sum = 0;
-            for (t, q) in template.iter().flatten().zip(weights.iter_mut().flatten()) {
-                let w = t * to_int;
-                *q = if w >= 0.0 { (w + 0.5) as i16 } else { -((0.5 - w) as i16) };
-                *sum += *q as i32;
-            }
-            *scale = if largest > 0.0 { largest / 32_767.0 } else { 0.0 };
-        }
+/// Where the learning window about `e`, of cells `cell`, lies in the read
+/// window `(centre, cell)` this frame read (its top-left cell), if it lies
+/// within it to the nearest cell and its cells are the same size to within
+/// [`SAME_CELL`]: learning then reads no pixels of its own.
+fn within(((cx, cy), read): ((Real, Real), (Real, Real)), e: &Ellipse, cell: (Real, Real)) -> Option<(usize, usize)> {
+    let same = |a: Real, b: Real| (a - b).abs() <= SAME_CELL * b;
+    if !(same(cell.0, read.0) && same(cell.1, read.1)) {
+        return None;
     }
+    let at = |d: Real, side: Real| {
+        let o = round(d / side) + (READ / 2 - LEARN / 2) as i32;
+        (0..=(READ - LEARN) as i32).contains(&o).then_some(o as usize)
+    };
+    Some((at(e.cy - cy, read.1)?, at(e.cx - cx, read.0)?))
+}
+
+/// Blends a channel's cut filter `cut` into its weights, sum and scale at
+/// `eta`, and quantises them afresh.
+fn blend((weights, sum, scale): (&mut [[i16; SUPPORT]; SUPPORT], &mut i32, &mut Real), cut: &Cut, eta: Real) {
+    let old = *scale * (1.0 - eta);
+    let mixed = |w: i16, h: Real| w as Real * old + h * eta;
+    let pairs = || weights.iter().flatten().zip(cut.iter().flatten());
+    let largest = pairs().fold(0.0 as Real, |m, (&w, &h)| m.max(mixed(w, h).abs()));
+    let to_int = if largest > 0.0 { 32_767.0 / largest } else { 0.0 };
+    *sum = 0;
+    for (q, &h) in weights.iter_mut().flatten().zip(cut.iter().flatten()) {
+        *q = round(mixed(*q, h) * to_int) as i16;
+        *sum += *q as i32;
+    }
+    *scale = if largest > 0.0 { largest / 32_767.0 } else { 0.0 };
 }
 
 /// Each channel's mean and gain over the `n` x `n` cells `cells` (tapered
 /// by `taper` where given, as the learning window is): grey to unit energy,
 /// the orientations together to unit energy. `None` for a window of one
 /// grey level.
-fn normalise(cells: &[u8], n: usize, taper: Option<&[Real; LEARN]>) -> Option<Norm> {
+fn normalise(lattice: Lattice<'_>, taper: Option<&[Real; LEARN]>) -> Option<Norm> {
     let mut norm = Norm::default();
     let mut energy = [0.0 as Real; CHANNELS];
+    let n = lattice.n;
     let count = n * n;
     for (k, (mean, e)) in norm.mean.iter_mut().zip(energy.iter_mut()).enumerate() {
-        let plane = cells.get(k * count..(k + 1) * count)?;
+        let rows = || (0..n).map(|r| lattice.row(k, r));
+        if rows().any(|row| row.len() != n) {
+            return None;
+        }
         match taper {
             // Untapered, in integers: exact, and the squared sum cancels
             // nothing (`count · Σv² − (Σv)²`, at most 2^43 for the largest
-            // window).
+            // window; the sums themselves fit 32 bits, checked below).
             None => {
                 let (s1, s2) =
-                    plane.iter().fold((0u64, 0u64), |(a, b), &v| (a + v as u64, b + (v as u64) * (v as u64)));
+                    rows().flatten().fold((0u32, 0u32), |(a, b), &v| (a + v as u32, b + v as u32 * v as u32));
+                let (s1, s2) = (s1 as u64, s2 as u64);
                 *mean = s1 as Real / count as Real;
                 *e = ((count as u64 * s2 - s1 * s1) as Real) / count as Real;
             }
             Some(t) => {
-                *mean = plane.iter().map(|&v| value(v)).sum::<Real>() / count as Real;
+                // An exact sum (at most 255 · 32², within f32's integers).
+                let s1: u32 = rows().flatten().map(|&v| v as u32).sum();
+                *mean = s1 as Real / count as Real;
                 // A second pass: the sum of squares less the squared sum
                 // would cancel away f32's digits.
-                *e = plane
-                    .iter()
-                    .enumerate()
-                    .map(|(i, &v)| {
-                        let w = t.get(i / n).copied().unwrap_or(0.0) * t.get(i % n).copied().unwrap_or(0.0);
-                        let d = (value(v) - *mean) * w;
-                        d * d
-                    })
-                    .sum();
+                *e = 0.0;
+                for (row, &tr) in rows().zip(t.iter()) {
+                    let mut line = 0.0 as Real;
+                    for (&v, &tc) in row.iter().zip(t.iter()) {
+                        let d = (value(v) - *mean) * tc;
+                        line += d * d;
+                    }
+                    *e += line * tr * tr;
+                }
             }
         }
     }
@@ -393,76 +585,46 @@ fn normalise(cells: &[u8], n: usize, taper: Option<&[Real; LEARN]>) -> Option<No
     Some(norm)
 }
 
-/// The channels' joint filter for the learning window `cells`, cut to the
-/// support, blended into `template` at `eta`. Each channel is transformed
-/// twice (once for the energy sum, once for its own solve) rather than all
-/// kept, so that one spectrum is on the stack at a time.
+/// One channel's filter from its half spectrum `work` (overwritten) into
+/// `cut`: the joint closed form `G X* / (Σ_j |X_j|² + λ)` (`gain` holding
+/// `G / (Σ_j |X_j|² + λ)`), turned back into space and cut to the support.
 #[inline(never)]
-fn solve(cells: &[u8], norm: &Norm, template: &mut Template, eta: Real) {
-    let mut energy = [[LAMBDA; COLS]; LEARN];
-    let mut work: Spectrum = [[Complex32::new(0.0, 0.0); COLS]; LEARN];
-    for k in 0..CHANNELS {
-        transform(&mut work, cells, norm, k);
-        for (e, w) in energy.iter_mut().zip(work.iter()) {
-            for (e, x) in e.iter_mut().zip(w.iter()) {
-                *e += x.re * x.re + x.im * x.im;
-            }
-        }
-    }
+fn solve(work: &mut Spectrum, gain: &Bins, cut: &mut Cut) {
     // The support, about the learning window's middle (where the target's
     // centre is at zero shift): rows and columns `LEARN / 2 ± HALF`.
     const FIRST: usize = LEARN / 2 - HALF;
-    for (k, template) in template.iter_mut().enumerate() {
-        transform(&mut work, cells, norm, k);
-        for (u, (row, e)) in work.iter_mut().zip(energy.iter()).enumerate() {
-            let pu = PEAK.get(u).copied().unwrap_or(0.0);
-            for (v, (x, &e)) in row.iter_mut().zip(e.iter()).enumerate() {
-                let pv = PEAK.get(v).copied().unwrap_or(0.0);
-                *x = x.conj() * (pu * pv / e);
-            }
+    // Back along the columns, then the rows the support needs, two at a
+    // time (rows a and b of a real filter have Hermitian spectra: one
+    // inverse FFT of `X_a + i X_b` gives a in the real part and b in the
+    // imaginary part).
+    for (col, gain) in work.iter_mut().zip(gain.iter()) {
+        for (x, &g) in col.iter_mut().zip(gain.iter()) {
+            *x = x.conj() * g;
         }
-        // Back along the columns, then the rows the support needs, two at
-        // a time (rows a and b of a real filter have Hermitian spectra:
-        // one inverse FFT of `X_a + i X_b` gives a in the real part and b
-        // in the imaginary part).
-        for c in 0..COLS {
-            let mut col = [Complex32::new(0.0, 0.0); LEARN];
-            for (v, row) in col.iter_mut().zip(work.iter()) {
-                *v = row.get(c).copied().unwrap_or_default();
-            }
-            let col = microfft::inverse::ifft_32(&mut col);
-            for (v, row) in col.iter().zip(work.iter_mut()) {
-                if let Some(slot) = row.get_mut(c) {
-                    *slot = *v;
-                }
-            }
+        let _ = microfft::inverse::ifft_32(col);
+    }
+    let scale = 1.0 / (LEARN * LEARN) as Real;
+    for pair in (FIRST..FIRST + SUPPORT).step_by(2) {
+        let mut full = [Complex32::new(0.0, 0.0); LEARN];
+        for (i, v) in full.iter_mut().enumerate() {
+            let bin = i.min(LEARN - i);
+            let at = |r: usize| work.get(bin).and_then(|col| col.get(r)).copied().unwrap_or_default();
+            let (xa, xb) = (at(pair), at(pair + 1));
+            let (xa, xb) = if i > LEARN / 2 { (xa.conj(), xb.conj()) } else { (xa, xb) };
+            *v = xa + Complex32::new(-xb.im, xb.re);
         }
-        let scale = 1.0 / (LEARN * LEARN) as Real;
-        for pair in (FIRST..FIRST + SUPPORT).step_by(2) {
-            let (a, b) = (work.get(pair).copied(), work.get(pair + 1).copied());
-            let (Some(a), b) = (a, b) else { continue };
-            let b = b.unwrap_or([Complex32::new(0.0, 0.0); COLS]);
-            let mut full = [Complex32::new(0.0, 0.0); LEARN];
-            for (i, v) in full.iter_mut().enumerate() {
-                let bin = i.min(LEARN - i);
-                let (xa, xb) = (a.get(bin).copied().unwrap_or_default(), b.get(bin).copied().unwrap_or_default());
-                let (xa, xb) = if i > LEARN / 2 { (xa.conj(), xb.conj()) } else { (xa, xb) };
-                *v = xa + Complex32::new(-xb.im, xb.re);
+        let full = microfft::inverse::ifft_32(&mut full);
+        for (half, r) in [pair, pair + 1].into_iter().enumerate() {
+            if !(FIRST..FIRST + SUPPORT).contains(&r) {
+                continue;
             }
-            let full = microfft::inverse::ifft_32(&mut full);
-            for (half, r) in [pair, pair + 1].into_iter().enumerate() {
-                if !(FIRST..FIRST + SUPPORT).contains(&r) {
-                    continue;
-                }
-                // The filter pairs its cell `LEARN / 2 − b` with the
-                // window's cell at offset `b` from the centre: the
-                // template is the cut filter turned half a turn.
-                let Some(out) = template.get_mut(FIRST + SUPPORT - 1 - r) else { continue };
-                for (j, w) in out.iter_mut().enumerate() {
-                    let Some(x) = full.get(FIRST + SUPPORT - 1 - j) else { continue };
-                    let h = if half == 0 { x.re } else { x.im } * scale;
-                    *w = *w * (1.0 - eta) + h * eta;
-                }
+            // The filter pairs its cell `LEARN / 2 − b` with the window's
+            // cell at offset `b` from the centre: the weights are the cut
+            // filter turned half a turn.
+            let Some(out) = cut.get_mut(FIRST + SUPPORT - 1 - r) else { continue };
+            for (j, w) in out.iter_mut().enumerate() {
+                let Some(x) = full.get(FIRST + SUPPORT - 1 - j) else { continue };
+                *w = if half == 0 { x.re } else { x.im } * scale;
             }
         }
     }
@@ -470,40 +632,31 @@ fn solve(cells: &[u8], norm: &Norm, template: &mut Template, eta: Real) {
 
 /// Channel `k` of the learning window, centred, scaled and tapered, into
 /// `work` as its half spectrum.
-fn transform(work: &mut Spectrum, cells: &[u8], norm: &Norm, k: usize) {
+fn transform(work: &mut Spectrum, lattice: Lattice<'_>, norm: &Norm, k: usize) {
     let (gain, mean) = (norm.gain.get(k).copied().unwrap_or(0.0), norm.mean.get(k).copied().unwrap_or(0.0));
-    let plane = cells.get(k * LEARN * LEARN..(k + 1) * LEARN * LEARN).unwrap_or(&[]);
-    for (r, (row, &tr)) in work.iter_mut().zip(TAPER.iter()).enumerate() {
+    for (r, &tr) in TAPER.iter().enumerate() {
+        let g = gain * tr;
         let mut line = [0.0 as Real; LEARN];
-        let cells = plane.get(r * LEARN..(r + 1) * LEARN).unwrap_or(&[]);
-        for ((x, &v), &tc) in line.iter_mut().zip(cells.iter()).zip(TAPER.iter()) {
-            *x = gain * (value(v) - mean) * tr * tc;
+        for ((x, &v), &tc) in line.iter_mut().zip(lattice.row(k, r).iter()).zip(TAPER.iter()) {
+            *x = (value(v) - mean) * g * tc;
         }
         let spectrum = microfft::real::rfft_32(&mut line);
         // The real FFT packs the last column's real value into the
         // first's imaginary part.
         let (dc, nyquist) = (spectrum[0].re, spectrum[0].im);
-        for (slot, v) in row.iter_mut().zip(spectrum.iter()) {
-            *slot = *v;
-        }
-        if let Some(first) = row.first_mut() {
-            *first = Complex32::new(dc, 0.0);
-        }
-        if let Some(last) = row.last_mut() {
-            *last = Complex32::new(nyquist, 0.0);
-        }
-    }
-    for c in 0..COLS {
-        let mut col = [Complex32::new(0.0, 0.0); LEARN];
-        for (v, row) in col.iter_mut().zip(work.iter()) {
-            *v = row.get(c).copied().unwrap_or_default();
-        }
-        let col = microfft::complex::cfft_32(&mut col);
-        for (v, row) in col.iter().zip(work.iter_mut()) {
-            if let Some(slot) = row.get_mut(c) {
-                *slot = *v;
+        for (col, x) in work.iter_mut().zip(spectrum.iter()) {
+            if let Some(slot) = col.get_mut(r) {
+                *slot = *x;
             }
         }
+        for (col, x) in [(0, dc), (COLS - 1, nyquist)] {
+            if let Some(slot) = work.get_mut(col).and_then(|col| col.get_mut(r)) {
+                *slot = Complex32::new(x, 0.0);
+            }
+        }
+    }
+    for col in work.iter_mut() {
+        let _ = microfft::complex::cfft_32(col);
     }
 }
 
@@ -513,6 +666,7 @@ impl Cue for GradientFilter {
     fn start(&mut self, settings: Option<&GradientCue>, frame: &Frame<'_>, e: &Ellipse) {
         self.learned = false;
         self.waiting = 0;
+        self.window = None;
         if settings.is_some() {
             self.learn(frame, e, 1.0);
         }
@@ -616,11 +770,14 @@ impl Cue for GradientFilter {
                 self.learn(frame, e, c.rate);
             }
         }
+        self.window = None;
     }
 }
 
 // The support fits the learning window, which fits the read window.
 const _: () = assert!(SUPPORT < LEARN && LEARN <= READ);
+// A window's sum of squared cells fits the 32 bits `normalise` sums in.
+const _: () = assert!(READ * READ * 255 * 255 <= u32::MAX as usize);
 
 #[cfg(test)]
 mod tests {
@@ -693,6 +850,65 @@ mod tests {
         let moved = blocks(7, -5);
         let seen = f.look(&frame(&moved), (150.0, 126.0), (16.0, 16.0)).unwrap();
         assert!((150.0 + seen.at.0 - 167.0).abs() < 1.5 && (126.0 + seen.at.1 - 115.0).abs() < 1.5, "{:?}", seen.at);
+    }
+
+    #[test]
+    fn learning_from_the_search_window_matches_a_fresh_read() {
+        // Reason: a cross-check of two ways to the same cells. With cells
+        // of 2.5 px (half axes 16), a box two cells right of and one cell
+        // above the read window's centre has its learning window from the
+        // read window's cell (row 6, column 9) (23 − 16 − 1, 23 − 16 + 2,
+        // by hand). Those cells must be the ones a fresh read of the box's
+        // learning window gives, but for the orientations on its border,
+        // which a fresh read takes without the neighbours beyond it.
+        let px = blocks(0, 0);
+        let e = Ellipse { cx: 165.0, cy: 117.5, hx: 16.0, hy: 16.0 };
+        assert_eq!(within(((160.0, 120.0), (2.5, 2.5)), &e, (2.5, 2.5)), Some((6, 9)));
+        let mut read = vec![0u8; CHANNELS * READ * READ];
+        let mut fresh = vec![0u8; CHANNELS * LEARN * LEARN];
+        assert!(channels::read(&frame(&px), (160.0, 120.0), (2.5, 2.5), READ, &mut read));
+        assert!(channels::read(&frame(&px), (165.0, 117.5), (2.5, 2.5), LEARN, &mut fresh));
+        let sub = Lattice { cells: &read, side: READ, top: 6, left: 9, n: LEARN };
+        let whole = Lattice::whole(&fresh, LEARN);
+        for k in 0..CHANNELS {
+            for r in 0..LEARN {
+                let inner = k == 0 || (1..LEARN - 1).contains(&r);
+                let (a, b) = (sub.row(k, r), whole.row(k, r));
+                if inner {
+                    assert_eq!(a.get(1..LEARN - 1), b.get(1..LEARN - 1), "channel {k}, row {r}");
+                }
+                if k == 0 {
+                    assert_eq!(a, b, "grey, row {r}");
+                }
+            }
+        }
+        // Learnt from there, the filter is the fresh read's to within the
+        // border's share: its orientations weigh little under the taper,
+        // but the joint solve's weak regulariser passes some of them on.
+        let mut fresh = GradientFilter::new();
+        fresh.learn(&frame(&px), &e, 1.0);
+        let mut reused = GradientFilter::new();
+        reused.learn(&frame(&px), &target(), 1.0);
+        assert!(reused.look(&frame(&px), (160.0, 120.0), (16.0, 16.0)).is_some());
+        assert!(reused.window.is_some());
+        reused.learn(&frame(&px), &e, 1.0);
+        assert!(reused.window.is_none(), "the window is used once");
+        for k in 0..CHANNELS {
+            let (a, b) = (&fresh.weights[k], &reused.weights[k]);
+            let worst = a
+                .iter()
+                .flatten()
+                .zip(b.iter().flatten())
+                .map(|(&x, &y)| (x as Real * fresh.scales[k] - y as Real * reused.scales[k]).abs())
+                .fold(0.0, Real::max);
+            let largest = 32_767.0 * fresh.scales[k];
+            assert!(worst < 0.1 * largest, "channel {k}: {worst} against {largest}");
+        }
+        // Beyond the read window (more than 7 cells off), or at another
+        // cell size, the learning window is read afresh.
+        let far = Ellipse { cx: 180.0, ..e };
+        assert_eq!(within(((160.0, 120.0), (2.5, 2.5)), &far, (2.5, 2.5)), None);
+        assert_eq!(within(((160.0, 120.0), (2.5, 2.5)), &e, (2.6, 2.5)), None);
     }
 
     #[test]
