@@ -376,6 +376,29 @@ impl Default for Config {
 }
 
 impl Config {
+    /// The most accurate configuration measured (docs/accuracy.md): the
+    /// gradient filter ([`GradientCue::MEASURED`], the `gradient` feature)
+    /// beside the grey-level one, and 0.6 of the hypotheses observed after
+    /// a confident frame ([`Config::sure_share`]), which pays for part of
+    /// the filter. It takes about half as much RAM again as the default
+    /// and more instructions a frame (docs/performance.md); a build without
+    /// the `gradient` feature refuses it by name, as it refuses the filter.
+    ///
+    /// ```
+    /// use pftrack::{Config, ConfigError, Error, ParamProblem, Tracker};
+    ///
+    /// match Tracker::<100>::new(Config::accurate(), 1) {
+    ///     Ok(tracker) => assert_eq!(tracker.config().sure_share, 0.6),
+    ///     Err(e) => assert_eq!(
+    ///         e,
+    ///         Error::Config(ConfigError { field: "gradient", problem: ParamProblem::NotBuilt { feature: "gradient" } })
+    ///     ),
+    /// }
+    /// ```
+    pub fn accurate() -> Self {
+        Config { gradient: Some(GradientCue::MEASURED), sure_share: 0.6, ..Config::default() }
+    }
+
     /// Whether some technique reads the surroundings' colours (see
     /// [`crate::foreground`]), so that the tracker learns them.
     pub fn uses_surroundings(&self) -> bool {

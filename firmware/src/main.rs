@@ -121,9 +121,11 @@ fn run() -> bool {
         "pf-sure" => make_sure_tracker(seed).map(|t| t.map(Any::Pf)),
         #[cfg(feature = "gradient")]
         "pf-gradient" => make_gradient_tracker(seed).map(|t| t.map(Any::Pf)),
+        #[cfg(feature = "gradient")]
+        "pf-accurate" => make_accurate_tracker(seed).map(|t| t.map(Any::Pf)),
         "meanshift" => make_meanshift(MeanShiftConfig::default()).map(|t| t.map(Any::MeanShift)),
         "kalman" => make_meanshift(MeanShiftConfig::kalman()).map(|t| t.map(Any::MeanShift)),
-        _ => fail!("tracker `{kind}` is not pf, meanshift or kalman"),
+        _ => fail!("tracker `{kind}` is not pf, meanshift or kalman (or one of this build's other kinds)"),
     };
     let mut tracker = match made {
         Ok(Some(t)) => t,
@@ -262,6 +264,15 @@ fn make_sure_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrac
 fn make_gradient_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
     let config = Config { gradient: Some(pftrack::GradientCue::MEASURED), correlation: None, ..Config::default() };
     let t = FwTracker::new(config, seed)?;
+    Ok(cortex_m::singleton!(: FwTracker = t))
+}
+
+/// [`make_tracker`] with `Config::accurate` (the gradient filter beside
+/// the grey-level one), in the build with the `gradient` feature.
+#[cfg(feature = "gradient")]
+#[inline(never)]
+fn make_accurate_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
+    let t = FwTracker::new(Config::accurate(), seed)?;
     Ok(cortex_m::singleton!(: FwTracker = t))
 }
 

@@ -27,6 +27,18 @@ const fn key(name: &'static str, help: &'static str, parse: Parse) -> Key {
 
 /// The keys `apply` understands, with what they set and how they are read.
 pub const KEYS: &[Key] = &[
+    key(
+        "config",
+        "default | accurate (the whole configuration, which the settings after it change: Config::default, or Config::accurate, both filters; accurate needs the gradient feature)",
+        |c, k, v| {
+            *c = match v {
+                "default" => Config::default(),
+                "accurate" => Config::accurate(),
+                _ => return Err(format!("{k}: `{v}` is not default or accurate")),
+            };
+            Ok(())
+        },
+    ),
     key("sampling", "full | checkerboard | quarter", sampling),
     key("resampling", "multinomial | systematic", resampling),
     key("binning", "rgb8x8x8 | hsv8x8x4 | rgb4x4x4 | adaptive (Birgé–Rozenholc)", binning),
@@ -111,7 +123,7 @@ pub const KEYS: &[Key] = &[
     ),
     key(
         "gradient",
-        "off | on | RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND (correlation filter on gradient channels over a wide window; on = 0.2:0.7:4:0.7:0.03:0.3:3:0.3)",
+        "off | on | RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND (correlation filter on gradient channels over a wide window; on = 0.2:0.7:4:0.7:0.03:0.3:3:0)",
         gradient,
     ),
     key(
@@ -440,6 +452,7 @@ mod tests {
                 "scene_motion" => "off",
                 "correlation" => "off",
                 "gradient" => "on",
+                "config" => "accurate",
                 "background_weight" => "1",
                 "template" => "0.3:0.05",
                 _ => "0.07",

@@ -173,12 +173,14 @@ pub(crate) fn validate_gradient(settings: Option<GradientCue>) -> Result<(), Con
 /// cue that places a target by the layout of its edges where its colours
 /// are its surroundings' too.
 ///
-/// Memory and time: about 16 KB of RAM in every tracker built with the
+/// Memory and time: about 12 KB of RAM in every tracker built with the
 /// feature (the read window's cells and the filter), more stack on the
-/// frames it learns, and about twice the instructions a frame of the
-/// grey-level filter's tracker (docs/performance.md). Off in
-/// [`Config::default`](crate::Config::default); it is meant to replace the
-/// grey-level filter (`correlation: None`), though both may run.
+/// frames it learns, and about half as many instructions a frame again as
+/// the default (docs/performance.md). Off in
+/// [`Config::default`](crate::Config::default); beside the grey-level
+/// filter it is [`Config::accurate`](crate::Config::accurate), the most
+/// accurate configuration measured. It may also replace the grey-level
+/// filter (`correlation: None`).
 ///
 /// ```
 /// use pftrack::{Config, ConfigError, Error, GradientCue, ParamProblem, Tracker};

@@ -4,8 +4,8 @@
 //! on nothing but the core and the fixture codecs, so it also builds for an
 //! ARMv6 Linux device (see the README).
 //!
-//! Usage: pftrack-trace FIXTURE [SEED [pf|pf-sure|colour|meanshift|kalman|pf-gradient]]
-//! (`pf-gradient` in a build with the `gradient` feature)
+//! Usage: pftrack-trace FIXTURE [SEED [pf|pf-sure|colour|meanshift|kalman|pf-gradient|pf-accurate]]
+//! (`pf-gradient` and `pf-accurate` in a build with the `gradient` feature)
 //!
 //! A fixture of several targets is tracked by a group of them all (the
 //! particle filter; mean shift follows one target), one line per target
@@ -55,7 +55,7 @@ fn run(path: &str, seed: u64, kind: &str) -> Result<(), String> {
     let ms_config = match kind {
         "pf" | "pf-sure" | "colour" => None,
         #[cfg(feature = "gradient")]
-        "pf-gradient" => None,
+        "pf-gradient" | "pf-accurate" => None,
         "meanshift" => Some(MeanShiftConfig::default()),
         "kalman" => Some(MeanShiftConfig::kalman()),
         _ => return Err(format!("tracker `{kind}` is not pf, pf-sure, colour, meanshift or kalman")),
@@ -72,6 +72,9 @@ fn run(path: &str, seed: u64, kind: &str) -> Result<(), String> {
         "pf-gradient" => {
             Config { gradient: Some(pftrack::GradientCue::MEASURED), correlation: None, ..Config::default() }
         }
+        // As the firmware's `pf-accurate` tracker.
+        #[cfg(feature = "gradient")]
+        "pf-accurate" => Config::accurate(),
         _ => Config::default(),
     };
     if h.targets > 1 {
