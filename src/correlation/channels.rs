@@ -56,25 +56,16 @@ pub(crate) fn read(frame: &Frame<'_>, centre: (Real, Real), cell: (Real, Real), 
         *x = at(j, centre.0, step.0, xmax);
     }
     let columns = columns.get(..points).unwrap_or(&[]);
-    let row = |i: usize, luma: &mut [u8; MAX_POINTS]| {
-        let y = at(i.min(points - 1), centre.1, step.1, ymax);
-        if let Some(pixels) = frame.row(y) {
-            // One format dispatch per row, not per pixel.
-            pixel::read(frame.format(), PointRow { frame, row: pixels, columns, luma });
-        }
-    };
     // Grey first: each cell the mean of its 2 x 2 points' lumas, as
-    // `LOG_GREY`.
-    let mut luma = [0u8; MAX_POINTS];
+    // `LOG_GREY`; each row of points adds its pairs' lumas to its cells.
     let mut grey = [0u16; MAX_CELLS];
     let plane = n * n;
     let per = (POINTS * POINTS) as u16;
     for i in 0..points {
-        row(i, &mut luma);
-        for (c, &l) in luma.iter().enumerate().take(points) {
-            if let Some(g) = grey.get_mut(c / POINTS) {
-                *g += l as u16;
-            }
+        let y = at(i, centre.1, step.1, ymax);
+        if let Some(pixels) = frame.row(y) {
+            // One format dispatch per row, not per pixel.
+            pixel::read(frame.format(), PointRow { frame, row: pixels, columns, grey: &mut grey });
         }
         if i % POINTS == POINTS - 1 {
             let r = i / POINTS;
@@ -97,16 +88,19 @@ pub(crate) fn read(frame: &Frame<'_>, centre: (Real, Real), cell: (Real, Real), 
             let gy = g(r + 1, c) - g(r.saturating_sub(1), c);
             let i = r * n + c;
             let (bin, f, m) = orientation(gx, gy).unwrap_or((0, 0, 0));
-            for k in 0..ORIENTATIONS {
-                let share = if k == bin {
-                    256 - f
-                } else if k == (bin + 1) % ORIENTATIONS {
-                    f
-                } else {
-                    0
-                };
+            // The length shared between the two bins the orientation falls
+            // between; the other bins get none.
+            let mut shares = [0u8; ORIENTATIONS];
+            let share = |part: u32| ((m * part + 32_768) >> 16).min(255) as u8;
+            if let Some(s) = shares.get_mut(bin) {
+                *s = share(256 - f);
+            }
+            if let Some(s) = shares.get_mut((bin + 1) % ORIENTATIONS) {
+                *s = share(f);
+            }
+            for (k, &s) in shares.iter().enumerate() {
                 if let Some(o) = rest.get_mut(k * plane + i) {
-                    *o = ((m * share + 32_768) >> 16).min(255) as u8;
+                    *o = s;
                 }
             }
         }
@@ -230,12 +224,13 @@ fn orientation(gx: i32, gy: i32) -> Option<(usize, u32, u32)> {
     Some((((b / width) as usize).min(ORIENTATIONS - 1), (b % width) * 256 / width, big * length))
 }
 
-/// One row of points: the lumas of `row` (a row of `frame`) at `columns`.
+/// One row of points: the lumas of `row` (a row of `frame`) at `columns`,
+/// each pair of points added to its cell's sum in `grey`.
 struct PointRow<'f, 'r> {
     frame: &'r Frame<'f>,
     row: &'f [u8],
     columns: &'r [usize],
-    luma: &'r mut [u8; MAX_POINTS],
+    grey: &'r mut [u16; MAX_CELLS],
 }
 
 impl RowReader for PointRow<'_, '_> {
@@ -245,18 +240,27 @@ impl RowReader for PointRow<'_, '_> {
 
     fn rows_of<P: PixelRead>(self) {
         let Some(px) = P::pixels(self.row) else { return };
-        for (l, &x) in self.luma.iter_mut().zip(self.columns.iter()) {
-            *l = px.get(x).map_or(0, |&p| P::px_luma(p));
+        let luma = |x: usize| px.get(x).map_or(0, |&p| P::px_luma(p)) as u16;
+        for (g, pair) in self.grey.iter_mut().zip(self.columns.chunks_exact(POINTS)) {
+            if let [a, b] = *pair {
+                *g += luma(a) + luma(b);
+            }
         }
     }
 
     #[inline(always)]
     fn general(self) {
-        for (l, &x) in self.luma.iter_mut().zip(self.columns.iter()) {
-            *l = self.frame.luma_in(self.row, x).unwrap_or(0);
+        let luma = |x: usize| self.frame.luma_in(self.row, x).unwrap_or(0) as u16;
+        for (g, pair) in self.grey.iter_mut().zip(self.columns.chunks_exact(POINTS)) {
+            if let [a, b] = *pair {
+                *g += luma(a) + luma(b);
+            }
         }
     }
 }
+
+// `PointRow` adds its points in pairs.
+const _: () = assert!(POINTS == 2);
 
 #[cfg(test)]
 mod tests {
