@@ -124,6 +124,17 @@ struct Norm {
     mean: [Real; CHANNELS],
 }
 
+/// How the filter's integer sums over a window's cells become its
+/// response: `Σ_k factor[k] · acc_k − offset`, where `acc_k` is channel
+/// `k`'s sum of weights times cells, `factor[k]` the channel's gain times
+/// its weights' scale, and `offset` the channels' means' share
+/// (`Σ_k factor[k] · mean[k] · Σ weights_k`), the same at every shift.
+#[derive(Copy, Clone, Debug, Default)]
+struct Reading {
+    factor: [Real; CHANNELS],
+    offset: Real,
+}
+
 /// An `n` x `n` square of cells in a buffer of [`CHANNELS`] planes of
 /// `side` x `side` cells ([`channels::read`]'s layout), from cell
 /// `(top, left)`.
@@ -156,7 +167,7 @@ struct Seen {
     centre: (Real, Real),
     /// Cell side, pixels (horizontal, vertical).
     cell: (Real, Real),
-    norm: Norm,
+    reading: Reading,
     /// The response's peak, the peak's offset from `centre` in pixels, and
     /// the peak-to-sidelobe ratio over the coarse grid.
     peak: Real,
@@ -259,16 +270,27 @@ impl GradientFilter {
         }
     }
 
-    /// The filter's response to the `n` x `n` cells `cells`, normalised by
-    /// `norm`, with its support's top-left cell at `(top, left)`; `None`
+    /// How the filter reads a window's cells normalised by `norm`.
+    fn reading(&self, norm: &Norm) -> Reading {
+        let mut out = Reading::default();
+        for (k, factor) in out.factor.iter_mut().enumerate() {
+            let at = |v: &[Real; CHANNELS]| v.get(k).copied().unwrap_or(0.0);
+            *factor = at(&norm.gain) * at(&self.scales);
+            out.offset += *factor * at(&norm.mean) * self.sums.get(k).copied().unwrap_or(0) as Real;
+        }
+        out
+    }
+
+    /// The filter's response to the `n` x `n` cells `cells`, read as
+    /// `reading`, with its support's top-left cell at `(top, left)`; `None`
     /// where the support leaves the cells.
-    fn response(&self, cells: &[u8], n: usize, norm: &Norm, top: i32, left: i32) -> Option<Real> {
+    fn response(&self, cells: &[u8], n: usize, reading: &Reading, top: i32, left: i32) -> Option<Real> {
         if top < 0 || left < 0 || top as usize + SUPPORT > n || left as usize + SUPPORT > n {
             return None;
         }
         let (top, left) = (top as usize, left as usize);
         let mut out = 0.0;
-        for (k, (weights, &sum)) in self.weights.iter().zip(self.sums.iter()).enumerate() {
+        for (k, (weights, &factor)) in self.weights.iter().zip(reading.factor.iter()).enumerate() {
             let plane = cells.get(k * n * n..(k + 1) * n * n)?;
             // At most 169 · 32,767 · 255 in magnitude: within an i32.
             let mut acc = 0i32;
@@ -277,18 +299,17 @@ impl GradientFilter {
                 let row: &[u8; SUPPORT] = plane.get(start..start + SUPPORT)?.try_into().ok()?;
                 acc += dot(weights, row);
             }
-            let (gain, mean, scale) = (norm.gain.get(k)?, norm.mean.get(k)?, self.scales.get(k)?);
-            out += gain * scale * (acc as Real - mean * sum as Real);
+            out += factor * acc as Real;
         }
-        Some(out)
+        Some(out - reading.offset)
     }
 
     /// The response in the read window at a shift of `(sr, sc)` cells from
     /// its centre.
-    fn at_shift(&self, norm: &Norm, sr: i32, sc: i32) -> Option<Real> {
+    fn at_shift(&self, reading: &Reading, sr: i32, sc: i32) -> Option<Real> {
         let origin = (READ / 2 - HALF) as i32;
         let weight = |s: i32| SHIFT_WEIGHT.get((s + (READ / 2) as i32) as usize).copied().unwrap_or(0.0);
-        Some(self.response(&self.cells, READ, norm, origin + sr, origin + sc)? * weight(sr) * weight(sc))
+        Some(self.response(&self.cells, READ, reading, origin + sr, origin + sc)? * weight(sr) * weight(sc))
     }
 
     /// The coarse search: the response of the 2 x 2-pooled filter to the
@@ -296,7 +317,7 @@ impl GradientFilter {
     /// [`Self::at_shift`] weights the shift it stands for. The best pooled
     /// shift (in pooled cells from the centre) and the peak-to-sidelobe
     /// ratio over all of them.
-    fn coarse(&self, norm: &Norm) -> Option<((i32, i32), Real)> {
+    fn coarse(&self, reading: &Reading) -> Option<((i32, i32), Real)> {
         // Pooled cell `p` holds the window's cells `2p` and `2p + 1`; the
         // filter is padded with a row and a column of zeros before its
         // first, so that at an even shift its padded top-left cell starts
@@ -335,7 +356,7 @@ impl GradientFilter {
             for tc in -span..=span {
                 let (top, left) = ((ORIGIN as i32 + tr) as usize, (ORIGIN as i32 + tc) as usize);
                 let mut out = 0.0;
-                for (k, (weights, &sum)) in weights.iter().zip(self.sums.iter()).enumerate() {
+                for (k, (weights, &factor)) in weights.iter().zip(reading.factor.iter()).enumerate() {
                     let plane = cells.get(k * POOLED * POOLED..(k + 1) * POOLED * POOLED)?;
                     // At most 49 · 4 · 32,767 · 255 in magnitude: within an i32.
                     let mut acc = 0i32;
@@ -344,10 +365,9 @@ impl GradientFilter {
                         let row: &[u8; POOLED_SUPPORT] = plane.get(start..start + POOLED_SUPPORT)?.try_into().ok()?;
                         acc += pooled_dot(weights, row);
                     }
-                    let (gain, mean, scale) = (norm.gain.get(k)?, norm.mean.get(k)?, self.scales.get(k)?);
-                    out += gain * scale * (acc as Real - mean * sum as Real);
+                    out += factor * acc as Real;
                 }
-                let v = out * weight(tr) * weight(tc);
+                let v = (out - reading.offset) * weight(tr) * weight(tc);
                 (s1, s2, count) = (s1 + v, s2 + v * v, count + 1);
                 if v > best {
                     (best, at) = (v, (tr, tc));
@@ -372,16 +392,16 @@ impl GradientFilter {
             return None;
         }
         self.window = Some((centre, cell));
-        let norm = normalise(Lattice::whole(&self.cells, READ), None)?;
+        let reading = self.reading(&normalise(Lattice::whole(&self.cells, READ), None)?);
         // The coarse search, on 2 x 2-pooled cells and weights: each pooled
         // shift answers for the four shifts it covers (a smoothed response
         // sampled every second shift, so that a sharp peak between the
         // samples is not missed), at a quarter of the products.
-        let (coarse, psr) = self.coarse(&norm)?;
+        let (coarse, psr) = self.coarse(&reading)?;
         // Then every shift about the coarse best, climbing while the best
         // is on the edge of those evaluated.
         let mut at = (2 * coarse.0, 2 * coarse.1);
-        let mut best = self.at_shift(&norm, at.0, at.1)?;
+        let mut best = self.at_shift(&reading, at.0, at.1)?;
         // The 3 x 3 shifts about `at` (outside the window: the least).
         let mut around = [[Real::MIN; 3]; 3];
         let mut settled = false;
@@ -394,7 +414,7 @@ impl GradientFilter {
                     *v = if (dr, dc) == (0, 0) {
                         best
                     } else {
-                        self.at_shift(&norm, r0 + dr, c0 + dc).unwrap_or(Real::MIN)
+                        self.at_shift(&reading, r0 + dr, c0 + dc).unwrap_or(Real::MIN)
                     };
                     if *v > best {
                         (best, moved) = (*v, (dr, dc));
@@ -414,13 +434,20 @@ impl GradientFilter {
             let v = if settled {
                 around.get(i).and_then(|row| row.get(j)).copied()
             } else {
-                self.at_shift(&norm, r + i as i32 - 1, c + j as i32 - 1)
+                self.at_shift(&reading, r + i as i32 - 1, c + j as i32 - 1)
             };
             v.filter(|&v| v > Real::MIN).unwrap_or(best)
         };
         let dr = sub_cell(near(0, 1), best, near(2, 1));
         let dc = sub_cell(near(1, 0), best, near(1, 2));
-        Some(Seen { centre, cell, norm, peak: best, at: ((c as Real + dc) * cell.0, (r as Real + dr) * cell.1), psr })
+        Some(Seen {
+            centre,
+            cell,
+            reading,
+            peak: best,
+            at: ((c as Real + dc) * cell.0, (r as Real + dr) * cell.1),
+            psr,
+        })
     }
 
     /// The response at zero shift of the window about `e`'s centre with
@@ -436,8 +463,8 @@ impl GradientFilter {
         if !channels::read(frame, (e.cx, e.cy), (cell.0 * scale, cell.1 * scale), N, &mut cells) {
             return None;
         }
-        let norm = normalise(Lattice::whole(&cells, N), None)?;
-        self.response(&cells, N, &norm, (N / 2 - HALF) as i32, (N / 2 - HALF) as i32)
+        let reading = self.reading(&normalise(Lattice::whole(&cells, N), None)?);
+        self.response(&cells, N, &reading, (N / 2 - HALF) as i32, (N / 2 - HALF) as i32)
     }
 
     /// Learns the window around `e` at `rate` (the first window is learnt
@@ -714,7 +741,7 @@ impl Cue for GradientFilter {
             let r = match slot {
                 Some(v) if !v.is_nan() => *v,
                 slot => {
-                    let r = self.at_shift(&seen.norm, sr, sc).map_or(0.0, |r| (r / seen.peak).max(0.0));
+                    let r = self.at_shift(&seen.reading, sr, sc).map_or(0.0, |r| (r / seen.peak).max(0.0));
                     if let Some(v) = slot {
                         *v = r;
                     }
