@@ -125,7 +125,7 @@ fn run() -> bool {
         "pf-accurate" => make_accurate_tracker(seed).map(|t| t.map(Any::Pf)),
         "meanshift" => make_meanshift(MeanShiftConfig::default()).map(|t| t.map(Any::MeanShift)),
         "kalman" => make_meanshift(MeanShiftConfig::kalman()).map(|t| t.map(Any::MeanShift)),
-        _ => fail!("tracker `{kind}` is not pf, meanshift or kalman (or one of this build's other kinds)"),
+        _ => fail!("tracker `{kind}` is not pf, meanshift or kalman"),
     };
     let mut tracker = match made {
         Ok(Some(t)) => t,
