@@ -12,7 +12,7 @@ use rand_xoshiro::Xoshiro128PlusPlus;
 
 fn config(pick: u8) -> Config {
     let d = Config::default();
-    match pick % 13 {
+    match pick % 14 {
         0 => d,
         1 => Config { quadrants: true, binning: Binning::Rgb4x4x4, ..d },
         2 => Config { quadrants: true, binning: Binning::Adaptive, ..d },
@@ -27,6 +27,9 @@ fn config(pick: u8) -> Config {
         // it with its response blended into the particles' similarities.
         10 => Config { gradient: Some(GradientCue::MEASURED), correlation: None, ..d },
         11 => Config { gradient: Some(GradientCue { blend: 0.3, ..GradientCue::MEASURED }), ..d },
+        // Both filters and a share of the hypotheses (the learning window
+        // taken from the search's cells).
+        12 => Config::accurate(),
         _ => Config { table: Some(TableMode { spacing: 1 }), ..d },
     }
 }
