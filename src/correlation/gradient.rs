@@ -482,14 +482,13 @@ impl GradientFilter {
             }
         };
         let Some(norm) = normalise(lattice, Some(&TAPER)) else { return };
-        let cells = lattice;
         // Each channel is transformed twice (once for the energy sum, once
         // for its own solve) rather than all kept, so that one spectrum is
         // on the stack at a time; all but the last.
         let mut work: Spectrum = [[Complex32::new(0.0, 0.0); LEARN]; COLS];
         let mut gain: Bins = [[LAMBDA; LEARN]; COLS];
         for k in 0..CHANNELS {
-            transform(&mut work, cells, &norm, k);
+            transform(&mut work, lattice, &norm, k);
             for (gain, col) in gain.iter_mut().zip(work.iter()) {
                 for (e, x) in gain.iter_mut().zip(col.iter()) {
                     *e += x.re * x.re + x.im * x.im;
@@ -508,7 +507,7 @@ impl GradientFilter {
         // The last channel transformed is still in `work`: solved first.
         for k in (0..CHANNELS).rev().take(1).chain(0..CHANNELS - 1) {
             if k + 1 < CHANNELS {
-                transform(&mut work, cells, &norm, k);
+                transform(&mut work, lattice, &norm, k);
             }
             solve(&mut work, &gain, &mut cut);
             if let (Some(weights), Some(sum), Some(scale)) =
