@@ -247,6 +247,33 @@ fn pooled_dot(w: &[i32; POOLED_SUPPORT], v: &[u8; POOLED_SUPPORT]) -> i32 {
     p(w0, v0) + p(w1, v1) + p(w2, v2) + p(w3, v3) + p(w4, v4) + p(w5, v5) + p(w6, v6)
 }
 
+/// The filter `weights` (rows of `S` weights, a channel each) read as
+/// `reading` over the `n` x `n` cells `cells` with its top-left cell at
+/// `(top, left)`: each channel's integer sum of products, row by row with
+/// `dot`, then `Σ_k factor[k] · acc_k − offset`. `None` where the filter
+/// leaves the cells. Shared by the full filter and the pooled one.
+#[inline(always)]
+fn products<W, const S: usize>(
+    weights: &[[[W; S]; S]; CHANNELS],
+    (cells, n): (&[u8], usize),
+    reading: &Reading,
+    (top, left): (usize, usize),
+    dot: impl Fn(&[W; S], &[u8; S]) -> i32,
+) -> Option<Real> {
+    let mut out = 0.0;
+    for (k, (weights, &factor)) in weights.iter().zip(reading.factor.iter()).enumerate() {
+        let plane = cells.get(k * n * n..(k + 1) * n * n)?;
+        let mut acc = 0i32;
+        for (r, weights) in weights.iter().enumerate() {
+            let start = (top + r) * n + left;
+            let row: &[u8; S] = plane.get(start..start + S)?.try_into().ok()?;
+            acc += dot(weights, row);
+        }
+        out += factor * acc as Real;
+    }
+    Some(out - reading.offset)
+}
+
 // `pooled_dot` is written for this support; the pooled lattice and the
 // padded filter's origin are whole pooled cells.
 const _: () = assert!(POOLED_SUPPORT == 7 && READ.is_multiple_of(2) && (READ / 2 - HALF - 1).is_multiple_of(2));
@@ -288,20 +315,8 @@ impl GradientFilter {
         if top < 0 || left < 0 || top as usize + SUPPORT > n || left as usize + SUPPORT > n {
             return None;
         }
-        let (top, left) = (top as usize, left as usize);
-        let mut out = 0.0;
-        for (k, (weights, &factor)) in self.weights.iter().zip(reading.factor.iter()).enumerate() {
-            let plane = cells.get(k * n * n..(k + 1) * n * n)?;
-            // At most 169 · 32,767 · 255 in magnitude: within an i32.
-            let mut acc = 0i32;
-            for (r, weights) in weights.iter().enumerate() {
-                let start = (top + r) * n + left;
-                let row: &[u8; SUPPORT] = plane.get(start..start + SUPPORT)?.try_into().ok()?;
-                acc += dot(weights, row);
-            }
-            out += factor * acc as Real;
-        }
-        Some(out - reading.offset)
+        // At most 169 · 32,767 · 255 in magnitude a channel: within an i32.
+        products(&self.weights, (cells, n), reading, (top as usize, left as usize), dot)
     }
 
     /// The response in the read window at a shift of `(sr, sc)` cells from
@@ -354,20 +369,10 @@ impl GradientFilter {
         let (mut s1, mut s2, mut count) = (0.0 as Real, 0.0 as Real, 0u32);
         for tr in -span..=span {
             for tc in -span..=span {
-                let (top, left) = ((ORIGIN as i32 + tr) as usize, (ORIGIN as i32 + tc) as usize);
-                let mut out = 0.0;
-                for (k, (weights, &factor)) in weights.iter().zip(reading.factor.iter()).enumerate() {
-                    let plane = cells.get(k * POOLED * POOLED..(k + 1) * POOLED * POOLED)?;
-                    // At most 49 · 4 · 32,767 · 255 in magnitude: within an i32.
-                    let mut acc = 0i32;
-                    for (r, weights) in weights.iter().enumerate() {
-                        let start = (top + r) * POOLED + left;
-                        let row: &[u8; POOLED_SUPPORT] = plane.get(start..start + POOLED_SUPPORT)?.try_into().ok()?;
-                        acc += pooled_dot(weights, row);
-                    }
-                    out += factor * acc as Real;
-                }
-                let v = (out - reading.offset) * weight(tr) * weight(tc);
+                let corner = ((ORIGIN as i32 + tr) as usize, (ORIGIN as i32 + tc) as usize);
+                // At most 49 · 4 · 32,767 · 255 in magnitude a channel:
+                // within an i32.
+                let v = products(&weights, (&cells, POOLED), reading, corner, pooled_dot)? * weight(tr) * weight(tc);
                 (s1, s2, count) = (s1 + v, s2 + v * v, count + 1);
                 if v > best {
                     (best, at) = (v, (tr, tc));
