@@ -336,22 +336,10 @@ impl CorrelationFilter {
     /// texture at all (a flat patch has nothing to correlate).
     pub(crate) fn respond(&self, frame: &Frame<'_>, e: &Ellipse, padding: Real) -> Option<Response> {
         let mut work = EMPTY;
-        if !self.learned || !transform(&mut work, frame, e, padding) {
+        if !self.product(&mut work, frame, e, padding) {
             return None;
         }
-        for (r, ((row, num), den)) in work.iter_mut().zip(self.num.iter()).zip(self.den.0.iter()).enumerate() {
-            // The inner columns, zipped (no bounds test per entry).
-            for ((f, a), &b) in row.iter_mut().zip(num.iter()).zip(den.iter()).skip(1) {
-                *f = *a * *f / (b + LAMBDA);
-            }
-            // The edge columns, where their slots say.
-            for c in [0, GRID / 2] {
-                if let Some(f) = row.get_mut(c) {
-                    let (a, b) = self.entry(slot(r, c));
-                    *f = a * *f / (b + LAMBDA);
-                }
-            }
-        }
+
         // Inverse along the columns: each row then holds the half spectrum
         // of one row of the (real) response.
         transform_columns(&mut work, microfft::inverse::ifft_16);
@@ -408,6 +396,55 @@ impl CorrelationFilter {
         Some(Response { peak: best, shift: ((signed(c) + dc) * sx, (signed(r) + dr) * sy), psr })
     }
 
+    /// The highest response of the window around `e` within a lattice
+    /// point of `at` (pixels from the window's centre): what the scale
+    /// search needs of a window, whose best shift the first window has
+    /// already found. `None` where [`respond`](Self::respond) answers
+    /// `None`. The inverse transform runs along the columns, then only the
+    /// three rows about `at` are summed at the three columns about it, in
+    /// place of the rows' transforms and a scan of the whole response.
+    pub(crate) fn peak_near(&self, frame: &Frame<'_>, e: &Ellipse, padding: Real, at: (Real, Real)) -> Option<Real> {
+        let mut work = EMPTY;
+        if !self.product(&mut work, frame, e, padding) {
+            return None;
+        }
+        transform_columns(&mut work, microfft::inverse::ifft_16);
+        let (sx, sy) = (2.0 * e.hx * padding / GRID as Real, 2.0 * e.hy * padding / GRID as Real);
+        let (r, c) = (lattice_point(at.1 / sy), lattice_point(at.0 / sx));
+        let mut best = Real::MIN;
+        for dr in [GRID - 1, 0, 1] {
+            let Some(row) = work.get((r + dr) % GRID) else { continue };
+            for dc in [GRID - 1, 0, 1] {
+                best = best.max(row_value(row, (c + dc) % GRID));
+            }
+        }
+        Some(best)
+    }
+
+    /// Reads the window around `e` into `work` as the product of its
+    /// spectrum with the filter's, `F A / (B + λ)`: the response's
+    /// spectrum. False before anything is learnt or for a window with no
+    /// texture at all.
+    fn product(&self, work: &mut Spectrum, frame: &Frame<'_>, e: &Ellipse, padding: Real) -> bool {
+        if !self.learned || !transform(work, frame, e, padding) {
+            return false;
+        }
+        for (r, ((row, num), den)) in work.iter_mut().zip(self.num.iter()).zip(self.den.0.iter()).enumerate() {
+            // The inner columns, zipped (no bounds test per entry).
+            for ((f, a), &b) in row.iter_mut().zip(num.iter()).zip(den.iter()).skip(1) {
+                *f = *a * *f / (b + LAMBDA);
+            }
+            // The edge columns, where their slots say.
+            for c in [0, GRID / 2] {
+                if let Some(f) = row.get_mut(c) {
+                    let (a, b) = self.entry(slot(r, c));
+                    *f = a * *f / (b + LAMBDA);
+                }
+            }
+        }
+        true
+    }
+
     /// `A` and `B` at `at` (learning writes them in place by the same
     /// slots: one lookup each rather than a read and a write, for fewer
     /// instructions per frame and less code).
@@ -425,6 +462,53 @@ impl CorrelationFilter {
         };
         (a, b.copied().unwrap_or(0.0))
     }
+}
+
+/// The lattice point nearest `cells` from point 0 along an axis (wrapped:
+/// a negative shift counts back from the last point).
+fn lattice_point(cells: Real) -> usize {
+    // Casts truncate towards zero (and saturate; NaN gives 0).
+    let n = if cells >= 0.0 { (cells + 0.5) as i32 } else { (cells - 0.5) as i32 };
+    n.rem_euclid(GRID as i32) as usize
+}
+
+/// `cos` and `sin` of `2π k / GRID`, computed at compile time: the inverse
+/// transform's factors for one point.
+const TURNS: [(Real, Real); GRID] = turns();
+
+// Evaluated at compile time only (for a `const`): an index out of range
+// would stop the build, never the device.
+#[allow(clippy::indexing_slicing)]
+const fn turns() -> [(Real, Real); GRID] {
+    use core::f64::consts::{FRAC_PI_2, TAU};
+    let mut out = [(0.0, 0.0); GRID];
+    let mut k = 0;
+    while k < GRID {
+        let a = TAU * k as f64 / GRID as f64;
+        // cos θ = sin(θ + π/2).
+        out[k] = (sin(a + FRAC_PI_2) as Real, sin(a) as Real);
+        k += 1;
+    }
+    out
+}
+
+/// The value at column `c` of a real row of the response from the row's
+/// half spectrum `row`: one point of its inverse transform,
+/// `Σ X(v) e^{2πi v c / GRID} / GRID` over the whole spectrum. Columns 1 to
+/// `GRID / 2 − 1` stand for their conjugate mirrors too, so they count
+/// twice (their real part: the sum is real).
+fn row_value(row: &[Complex32; COLS], c: usize) -> Real {
+    let (mut edge, mut inner) = (0.0 as Real, 0.0 as Real);
+    for (v, x) in row.iter().enumerate() {
+        let (cos, sin) = TURNS.get((v * c) % GRID).copied().unwrap_or_default();
+        let term = x.re * cos - x.im * sin;
+        if v == 0 || v == GRID / 2 {
+            edge += term;
+        } else {
+            inner += term;
+        }
+    }
+    (edge + 2.0 * inner) / GRID as Real
 }
 
 /// Reads the window around `e` into `work` and transforms it; false
@@ -583,6 +667,7 @@ impl Cue for CorrelationFilter {
         // A response with no clear peak says nothing of where the target
         // went, nor of its size.
         let sure = response.psr >= c.min_psr;
+        let before = (ellipse.cx, ellipse.cy);
         if sure {
             let (dx, dy) = (c.pull * response.shift.0, c.pull * response.shift.1);
             shift_estimate(ellipse, particles, (dx, dy), frame);
@@ -591,14 +676,17 @@ impl Cue for CorrelationFilter {
         // centre, against the first response, whose peak is already the
         // best match at the present size wherever it lay in the window.
         // Not where the size is decided outside (`search` false).
+        // Each larger or smaller window is read at the shift where the
+        // first one's peak now lies (what the pull left of it), not searched.
         if sure && c.scale_step > 0.0 && search {
+            let left = (response.shift.0 - (ellipse.cx - before.0), response.shift.1 - (ellipse.cy - before.1));
             let mut best = (response.peak, 1.0);
             for s in [1.0 + c.scale_step, 1.0 / (1.0 + c.scale_step)] {
                 let scaled = Ellipse { hx: ellipse.hx * s, hy: ellipse.hy * s, ..*ellipse };
-                if let Some(r) = self.respond(frame, &scaled, c.padding)
-                    && r.peak > best.0
+                if let Some(r) = self.peak_near(frame, &scaled, c.padding, left)
+                    && r > best.0
                 {
-                    best = (r.peak, s);
+                    best = (r, s);
                 }
             }
             let f = 1.0 + c.scale_pull * (best.1 - 1.0);
@@ -805,6 +893,31 @@ mod tests {
             let other = texture(0.0, 0.0, OTHER);
             let o = filter.respond(&frame(&other), &target(), 2.0).unwrap();
             assert!(o.psr < 0.6 * r.psr, "PSR {} on an unseen texture against {} on the target", o.psr, r.psr);
+        }
+    }
+
+    #[test]
+    fn the_peak_near_a_shift_is_the_whole_responses_peak_there() {
+        // Reason: a cross-check of two inverse transforms. `respond` runs
+        // microfft's inverse over rows and columns and scans every value;
+        // `peak_near` runs it over the columns and sums three rows by hand
+        // at three columns. About the whole response's peak (its sub-cell
+        // shift rounds to the peak's lattice point) both must find the
+        // same value; five cells away, where the moved texture does not
+        // answer, the local peak must be lower (the whole response's peak
+        // bounds every value of it).
+        let first = texture(0.0, 0.0, WAVES);
+        let mut filter = CorrelationFilter::new();
+        filter.learn(&frame(&first), &target(), 2.0, 0.05);
+        let (cx, cy) = (4.0, 3.0); // the window's cells: 64 x 48 px over 16
+        for (dx, dy) in [(3.0, -2.0), (-5.0, 4.0), (0.0, 0.0), (8.0, 6.0)] {
+            let moved = texture(dx, dy, WAVES);
+            let r = filter.respond(&frame(&moved), &target(), 2.0).unwrap();
+            let near = filter.peak_near(&frame(&moved), &target(), 2.0, r.shift).unwrap();
+            assert!((near - r.peak).abs() <= 1e-5 * r.peak.abs(), "moved by ({dx}, {dy}): {near} against {}", r.peak);
+            let away = (r.shift.0 + 5.0 * cx, r.shift.1 + 5.0 * cy);
+            let far = filter.peak_near(&frame(&moved), &target(), 2.0, away).unwrap();
+            assert!(far < 0.9 * r.peak, "moved by ({dx}, {dy}): {far} five cells away against {}", r.peak);
         }
     }
 
