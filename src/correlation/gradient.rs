@@ -125,15 +125,26 @@ struct Norm {
 }
 
 /// How the filter's integer sums over a window's cells become its
-/// response: `Σ_k factor[k] · acc_k − offset`, where `acc_k` is channel
-/// `k`'s sum of weights times cells, `factor[k]` the channel's gain times
-/// its weights' scale, and `offset` the channels' means' share
-/// (`Σ_k factor[k] · mean[k] · Σ weights_k`), the same at every shift.
+/// response: `Σ_k f_k · acc_k − m`, where `acc_k` is channel `k`'s sum of
+/// weights times cells, `f_k` the channel's gain times its weights' scale,
+/// and `m` the channels' means' share (`Σ_k f_k · mean[k] · Σ weights_k`),
+/// the same at every shift. In integers up to the last step (one
+/// conversion a shift: the Cortex-M0+'s floating point is in software):
+/// `factor[k]` is `f_k` in units of `1 / q`, the largest ±2^15, `offset`
+/// is `m` in the same units, and the response is
+/// `((Σ_k factor[k] · acc_k − offset) >> READING_SHIFT) · unit`.
 #[derive(Copy, Clone, Debug, Default)]
 struct Reading {
-    factor: [Real; CHANNELS],
-    offset: Real,
+    factor: [i32; CHANNELS],
+    offset: i64,
+    unit: Real,
 }
+
+/// The bits a [`Reading`]'s sum drops before its conversion. The sum less
+/// the offset is `Σ_k factor[k] · Σ w (cell − mean[k])`, at most
+/// `5 · 2^15 · 169 · 32,767 · 255 < 2^48` in magnitude (the pooled filter's
+/// 49 weights sum the full one's 169), so what is left fits an `i32`.
+const READING_SHIFT: u32 = 17;
 
 /// An `n` x `n` square of cells in a buffer of [`CHANNELS`] planes of
 /// `side` x `side` cells ([`channels::read`]'s layout), from cell
@@ -260,7 +271,7 @@ fn products<W, const S: usize>(
     (top, left): (usize, usize),
     dot: impl Fn(&[W; S], &[u8; S]) -> i32,
 ) -> Option<Real> {
-    let mut out = 0.0;
+    let mut out = -reading.offset;
     for (k, (weights, &factor)) in weights.iter().zip(reading.factor.iter()).enumerate() {
         let plane = cells.get(k * n * n..(k + 1) * n * n)?;
         let mut acc = 0i32;
@@ -269,9 +280,9 @@ fn products<W, const S: usize>(
             let row: &[u8; S] = plane.get(start..start + S)?.try_into().ok()?;
             acc += dot(weights, row);
         }
-        out += factor * acc as Real;
+        out += factor as i64 * acc as i64;
     }
-    Some(out - reading.offset)
+    Some((out >> READING_SHIFT) as i32 as Real * reading.unit)
 }
 
 // `pooled_dot` is written for this support; the pooled lattice and the
@@ -299,11 +310,21 @@ impl GradientFilter {
 
     /// How the filter reads a window's cells normalised by `norm`.
     fn reading(&self, norm: &Norm) -> Reading {
-        let mut out = Reading::default();
-        for (k, factor) in out.factor.iter_mut().enumerate() {
+        let (mut factors, mut offset) = ([0.0 as Real; CHANNELS], 0.0 as Real);
+        for (k, factor) in factors.iter_mut().enumerate() {
             let at = |v: &[Real; CHANNELS]| v.get(k).copied().unwrap_or(0.0);
             *factor = at(&norm.gain) * at(&self.scales);
-            out.offset += *factor * at(&norm.mean) * self.sums.get(k).copied().unwrap_or(0) as Real;
+            offset += *factor * at(&norm.mean) * self.sums.get(k).copied().unwrap_or(0) as Real;
+        }
+        let largest = factors.iter().fold(0.0 as Real, |m, f| m.max(f.abs()));
+        if !(largest > 0.0) {
+            return Reading::default();
+        }
+        let q = 32_768.0 / largest;
+        let mut out =
+            Reading { offset: (offset * q) as i64, unit: (1u32 << READING_SHIFT) as Real / q, ..Reading::default() };
+        for (f, &v) in out.factor.iter_mut().zip(factors.iter()) {
+            *f = round(v * q);
         }
         out
     }
