@@ -157,49 +157,37 @@ const fn exp(x: f64) -> f64 {
     sum
 }
 
-/// `ln(1 + l)` for every luma `l` in units of 2^-12 (at most 22,713),
-/// computed at compile time (the window's samples are log-luma, as in
-/// MOSSE, so that a shadow scales rather than shifts them; a table spares
-/// 2048 logarithms a frame). Integers, so that a window's mean and spread
-/// are exact integer sums (the Cortex-M0+'s floating point is in
-/// software), and a unit (0.00024) far below the steps between lumas'
-/// logarithms that a window's spread is made of.
-pub(super) const LOG_LUMA: [u16; 256] = log_luma_table();
-
-/// The units of [`LOG_LUMA`] in one.
-const LOG_LUMA_ONE: Real = 4096.0;
+/// `ln(1 + l)` for every luma `l`, computed at compile time (the window's
+/// samples are log-luma, as in MOSSE, so that a shadow scales rather than
+/// shifts them; a table spares 2048 logarithms a frame).
+pub(super) const LOG_LUMA: [Real; 256] = log_luma_table();
 
 // Evaluated at compile time only (for a `const`): an index out of range
 // would stop the build, never the device.
 #[allow(clippy::indexing_slicing)]
-const fn log_luma_table() -> [u16; 256] {
-    let mut out = [0; 256];
+const fn log_luma_table() -> [Real; 256] {
+    let mut out = [0.0; 256];
     let mut l = 0;
     while l < 256 {
-        out[l] = (ln_1p(l) * LOG_LUMA_ONE as f64 + 0.5) as u16;
+        // ln(x) = k ln 2 + ln(m), x = m 2^k with m in [1, 2); then
+        // ln(m) = 2 atanh(t), t = (m − 1) / (m + 1) ≤ 1/3, whose series
+        // converges by a factor of 9 a term.
+        let (mut m, mut k) = ((l + 1) as f64, 0);
+        while m >= 2.0 {
+            m /= 2.0;
+            k += 1;
+        }
+        let t = (m - 1.0) / (m + 1.0);
+        let (mut power, mut sum, mut n) = (t, 0.0, 0);
+        while n < 20 {
+            sum += power / (2 * n + 1) as f64;
+            power *= t * t;
+            n += 1;
+        }
+        out[l] = (k as f64 * core::f64::consts::LN_2 + 2.0 * sum) as Real;
         l += 1;
     }
     out
-}
-
-/// `ln(1 + l)`, at compile time only.
-pub(super) const fn ln_1p(l: usize) -> f64 {
-    // ln(x) = k ln 2 + ln(m), x = m 2^k with m in [1, 2); then
-    // ln(m) = 2 atanh(t), t = (m − 1) / (m + 1) ≤ 1/3, whose series
-    // converges by a factor of 9 a term.
-    let (mut m, mut k) = ((l + 1) as f64, 0);
-    while m >= 2.0 {
-        m /= 2.0;
-        k += 1;
-    }
-    let t = (m - 1.0) / (m + 1.0);
-    let (mut power, mut sum, mut n) = (t, 0.0, 0);
-    while n < 20 {
-        sum += power / (2 * n + 1) as f64;
-        power *= t * t;
-        n += 1;
-    }
-    k as f64 * core::f64::consts::LN_2 + 2.0 * sum
 }
 
 /// What the filter saw at a window: where its response peaks, and how
@@ -346,6 +334,7 @@ impl CorrelationFilter {
     /// Correlates the filter with the window around `e`: where the response
     /// peaks, or `None` before anything is learnt or for a window with no
     /// texture at all (a flat patch has nothing to correlate).
+    #[inline(never)]
     pub(crate) fn respond(&self, frame: &Frame<'_>, e: &Ellipse, padding: Real) -> Option<Response> {
         let mut work = EMPTY;
         if !self.product(&mut work, frame, e, padding) {
@@ -415,6 +404,10 @@ impl CorrelationFilter {
     /// `None`. The inverse transform runs along the columns, then only the
     /// three rows about `at` are summed at the three columns about it, in
     /// place of the rows' transforms and a scan of the whole response.
+    // Out of line, as `respond` and `product` are: inlined in `place`,
+    // each would keep its own spectrum in one frame (and its own copy of
+    // the transform in the code).
+    #[inline(never)]
     pub(crate) fn peak_near(&self, frame: &Frame<'_>, e: &Ellipse, padding: Real, at: (Real, Real)) -> Option<Real> {
         let mut work = EMPTY;
         if !self.product(&mut work, frame, e, padding) {
@@ -437,6 +430,7 @@ impl CorrelationFilter {
     /// spectrum with the filter's, `F A / (B + λ)`: the response's
     /// spectrum. False before anything is learnt or for a window with no
     /// texture at all.
+    #[inline(never)]
     fn product(&self, work: &mut Spectrum, frame: &Frame<'_>, e: &Ellipse, padding: Real) -> bool {
         if !self.learned || !transform(work, frame, e, padding) {
             return false;
@@ -535,9 +529,7 @@ fn transform(work: &mut Spectrum, frame: &Frame<'_>, e: &Ellipse, padding: Real)
     for (c, x) in columns.iter_mut().enumerate() {
         *x = crate::scalar::clamp(x0 + (c as Real + 0.5) * w / GRID as Real, 0.0, xmax) as usize;
     }
-    // The sum and the sum of squares, exact: each sample is below 2^15,
-    // each square below 2^30.
-    let (mut s1, mut s2) = (0u32, 0u64);
+    let mut s1 = 0.0 as Real;
     for (r, row) in work.iter_mut().enumerate() {
         let y = crate::scalar::clamp(y0 + (r as Real + 0.5) * h / GRID as Real, 0.0, ymax) as usize;
         let mut luma = [0u8; GRID];
@@ -548,29 +540,28 @@ fn transform(work: &mut Spectrum, frame: &Frame<'_>, e: &Ellipse, padding: Real)
         for (slot, pair) in row.iter_mut().zip(luma.chunks_exact(2)) {
             if let [a, b] = pair {
                 let (a, b) = (log_luma(*a), log_luma(*b));
-                s1 += a + b;
-                s2 += (a * a) as u64 + (b * b) as u64;
-                *slot = Complex32::new(a as Real, b as Real);
+                s1 += a;
+                s1 += b;
+                *slot = Complex32::new(a, b);
             }
         }
     }
-    // `N Σ v² − (Σ v)²`, the spread times `N²`, exact in integers (no
-    // cancellation, as a sum of squares less a squared sum has in `f32`);
-    // then the energy `Σ (v − mean)²` in units of one.
-    let spread = (GRID as u64 * GRID as u64 * s2).saturating_sub(s1 as u64 * s1 as u64);
-    let energy = spread as Real / (SAMPLES * LOG_LUMA_ONE * LOG_LUMA_ONE);
+    let mean = s1 / SAMPLES;
+    // A second pass: the sum of squares less the squared sum would
+    // cancel away f32's digits (log-luma near 5, spread near 0.3).
+    let energy: Real = work
+        .iter()
+        .flat_map(|row| row.iter().take(GRID / 2))
+        .map(|v| (v.re - mean) * (v.re - mean) + (v.im - mean) * (v.im - mean))
+        .sum();
     if !(energy > 1e-6) {
         return false;
     }
-    // Exact: `s1 < 2^23`, and a division by 256 moves the exponent only.
-    let mean = s1 as Real / SAMPLES;
-    // Centred samples (still in the table's units) scale to unit energy.
-    let scale = 1.0 / (sqrt(energy) * LOG_LUMA_ONE);
+    let scale = 1.0 / sqrt(energy);
     // Each row: centred, scaled, tapered, then its real FFT, unpacked
     // into columns 0 to GRID / 2 (the real FFT packs the last one's real
     // value into the first's imaginary part).
     for (row, &tr) in work.iter_mut().zip(TAPER.iter()) {
-        let row_scale = scale * tr;
         let mut line = [0.0 as Real; GRID];
         for (pair, slot) in line.chunks_exact_mut(2).zip(row.iter()) {
             if let [a, b] = pair {
@@ -578,7 +569,7 @@ fn transform(work: &mut Spectrum, frame: &Frame<'_>, e: &Ellipse, padding: Real)
             }
         }
         for (v, &tc) in line.iter_mut().zip(TAPER.iter()) {
-            *v = (*v - mean) * row_scale * tc;
+            *v = (*v - mean) * scale * tr * tc;
         }
         let spectrum = microfft::real::rfft_16(&mut line);
         let (dc, nyquist) = (spectrum[0].re, spectrum[0].im);
@@ -614,9 +605,9 @@ fn transform_columns(work: &mut Spectrum, fft: fn(&mut [Complex32; GRID]) -> &mu
     }
 }
 
-/// `ln(1 + l)` in the table's units.
-fn log_luma(l: u8) -> u32 {
-    LOG_LUMA.get(l as usize).copied().unwrap_or(0) as u32
+/// `ln(1 + l)`, from the table.
+fn log_luma(l: u8) -> Real {
+    LOG_LUMA.get(l as usize).copied().unwrap_or(0.0)
 }
 
 /// The luma of `row`'s pixels at `columns`, in a format whose pixels are
@@ -783,9 +774,8 @@ mod tests {
             assert!((t as f64 - s * s).abs() < 1e-6, "taper {i}: {t} against {}", s * s);
         }
         for (l, &v) in LOG_LUMA.iter().enumerate() {
-            // Rounded to the nearest unit of 2^-12.
             let e = (l as f64).ln_1p();
-            assert!((v as f64 / 4096.0 - e).abs() <= 0.5 / 4096.0 + 1e-9, "ln(1 + {l}): {v} against {e}");
+            assert!((v as f64 - e).abs() < 1e-5, "ln(1 + {l}): {v} against {e}");
         }
         for (u, &p) in PEAK.iter().enumerate() {
             let e: f64 = (0..GRID)
@@ -804,9 +794,7 @@ mod tests {
         // Reason: a cross-check of the packed real FFT, the unpacking of
         // its last column and the column FFTs against the DFT's definition,
         // summed directly in f64 over samples prepared as the module's doc
-        // says (nearest pixel, log-luma, unit energy, Hann taper). The
-        // window's mean and energy come from exact integer sums there, in
-        // f64 here.
+        // says (nearest pixel, log-luma, unit energy, Hann taper).
         let px = texture(0.0, 0.0, WAVES);
         let f = frame(&px);
         let e = target();
@@ -819,9 +807,7 @@ mod tests {
             for (c, v) in row.iter_mut().enumerate() {
                 let x = (x0 + (c as f64 + 0.5) * w / GRID as f64).clamp(0.0, (W - 1) as f64) as usize;
                 let y = (y0 + (r as f64 + 0.5) * h / GRID as f64).clamp(0.0, (H - 1) as f64) as usize;
-                // The table's log-luma (itself checked against std's
-                // `ln_1p` by `the_tables_match_the_functions_they_stand_for`).
-                *v = LOG_LUMA[px[y * W + x] as usize] as f64 / 4096.0;
+                *v = (px[y * W + x] as f64).ln_1p();
             }
         }
         let n = (GRID * GRID) as f64;
