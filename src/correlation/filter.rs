@@ -340,7 +340,6 @@ impl CorrelationFilter {
         if !self.product(&mut work, frame, e, padding) {
             return None;
         }
-
         // Inverse along the columns: each row then holds the half spectrum
         // of one row of the (real) response.
         transform_columns(&mut work, microfft::inverse::ifft_16);
@@ -390,7 +389,7 @@ impl CorrelationFilter {
         let dc = sub_cell(value(r, c + GRID - 1), best, value(r, c + 1));
         // The lattice point past the middle is a negative shift (wrapped).
         let signed = |i: usize| if i > GRID / 2 { i as Real - GRID as Real } else { i as Real };
-        let (sx, sy) = (2.0 * e.hx * padding / GRID as Real, 2.0 * e.hy * padding / GRID as Real);
+        let (sx, sy) = cell(e, padding);
         let mean = s1 / SAMPLES;
         let sd = sqrt((s2 / SAMPLES - mean * mean).max(0.0));
         let psr = if sd > 0.0 { (best - mean) / sd } else { 0.0 };
@@ -414,7 +413,7 @@ impl CorrelationFilter {
             return None;
         }
         transform_columns(&mut work, microfft::inverse::ifft_16);
-        let (sx, sy) = (2.0 * e.hx * padding / GRID as Real, 2.0 * e.hy * padding / GRID as Real);
+        let (sx, sy) = cell(e, padding);
         let (r, c) = (lattice_point(at.1 / sy), lattice_point(at.0 / sx));
         let mut best = Real::MIN;
         for dr in [GRID - 1, 0, 1] {
@@ -470,12 +469,22 @@ impl CorrelationFilter {
     }
 }
 
+/// The side of a lattice cell, pixels (horizontal, vertical), of the window
+/// `padding` times the box of `e`.
+fn cell(e: &Ellipse, padding: Real) -> (Real, Real) {
+    (2.0 * e.hx * padding / GRID as Real, 2.0 * e.hy * padding / GRID as Real)
+}
+
+/// Rounds to the nearest integer (halves away from zero; the cast
+/// saturates, and NaN gives 0).
+pub(super) fn round(v: Real) -> i32 {
+    if v >= 0.0 { (v + 0.5) as i32 } else { -((0.5 - v) as i32) }
+}
+
 /// The lattice point nearest `cells` from point 0 along an axis (wrapped:
 /// a negative shift counts back from the last point).
 fn lattice_point(cells: Real) -> usize {
-    // Casts truncate towards zero (and saturate; NaN gives 0).
-    let n = if cells >= 0.0 { (cells + 0.5) as i32 } else { (cells - 0.5) as i32 };
-    n.rem_euclid(GRID as i32) as usize
+    round(cells).rem_euclid(GRID as i32) as usize
 }
 
 /// `cos` and `sin` of `2π k / GRID`, computed at compile time: the inverse

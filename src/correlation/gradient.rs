@@ -37,7 +37,7 @@
 
 use super::GradientCue;
 use super::channels::{self, CHANNELS, MAX_CELLS};
-use super::filter::{peak, sin, sub_cell, taper};
+use super::filter::{peak, round, sin, sub_cell, taper};
 use crate::cue::Cue;
 use crate::filter::{Particle, scale_estimate, shift_estimate};
 use crate::frame::Frame;
@@ -288,11 +288,6 @@ fn products<W, const S: usize>(
 // `pooled_dot` is written for this support; the pooled lattice and the
 // padded filter's origin are whole pooled cells.
 const _: () = assert!(POOLED_SUPPORT == 7 && READ.is_multiple_of(2) && (READ / 2 - HALF - 1).is_multiple_of(2));
-
-/// Rounds to the nearest integer (halves away from zero).
-fn round(v: Real) -> i32 {
-    if v >= 0.0 { (v + 0.5) as i32 } else { -((0.5 - v) as i32) }
-}
 
 impl GradientFilter {
     /// An empty filter (it answers nothing until it has learnt a window).
