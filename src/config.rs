@@ -380,7 +380,9 @@ impl Config {
     /// gradient filter ([`GradientCue::MEASURED`], the `gradient` feature)
     /// beside the grey-level one, and 0.6 of the hypotheses observed after
     /// a confident frame ([`Config::sure_share`]), which pays for part of
-    /// the filter. It takes about half as much RAM again as the default
+    /// the filter. The grey-level filter takes its response's highest value
+    /// wherever it lies ([`CorrelationCue::centre_bias`] 0): beside the
+    /// gradient filter the bias lost on the check split. It takes about half as much RAM again as the default
     /// and more instructions a frame (docs/performance.md); a build without
     /// the `gradient` feature refuses it by name, as it refuses the filter.
     ///
@@ -396,7 +398,8 @@ impl Config {
     /// }
     /// ```
     pub fn accurate() -> Self {
-        Config { gradient: Some(GradientCue::MEASURED), sure_share: 0.6, ..Config::default() }
+        let correlation = crate::correlation::DEFAULT.map(|c| CorrelationCue { centre_bias: 0.0, ..c });
+        Config { gradient: Some(GradientCue::MEASURED), sure_share: 0.6, correlation, ..Config::default() }
     }
 
     /// Whether some technique reads the surroundings' colours (see

@@ -118,7 +118,7 @@ pub const KEYS: &[Key] = &[
     ),
     key(
         "correlation",
-        "off | on | PADDING:RATE:LEARN_ABOVE:PULL[:SCALE_STEP:SCALE_PULL[:MIN_PSR]] (correlation filter on the grey levels; on = 2:0.05:0.7:0.7:0.03:0.3:3)",
+        "off | on | PADDING:RATE:LEARN_ABOVE:PULL[:SCALE_STEP:SCALE_PULL[:MIN_PSR[:CENTRE_BIAS]]] (correlation filter on the grey levels; on = 2:0.05:0.7:0.7:0.03:0.3:3:0.7)",
         correlation,
     ),
     key(
@@ -385,11 +385,16 @@ fn correlation(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
         ["off"] => None,
         ["on"] => Some(pftrack::CorrelationCue::MEASURED),
         [padding, rate, above, pull, scale @ ..] => {
-            let (scale_step, scale_pull, min_psr) = match scale {
-                [] => (0.0, 0.0, 0.0),
-                [step, pull] => (num(key, step)?, num(key, pull)?, 0.0),
-                [step, pull, psr] => (num(key, step)?, num(key, pull)?, num(key, psr)?),
-                _ => return Err(format!("{key}: `{v}`: a scale search needs SCALE_STEP:SCALE_PULL[:MIN_PSR]")),
+            let (scale_step, scale_pull, min_psr, centre_bias) = match scale {
+                [] => (0.0, 0.0, 0.0, 0.0),
+                [step, pull] => (num(key, step)?, num(key, pull)?, 0.0, 0.0),
+                [step, pull, psr] => (num(key, step)?, num(key, pull)?, num(key, psr)?, 0.0),
+                [step, pull, psr, bias] => (num(key, step)?, num(key, pull)?, num(key, psr)?, num(key, bias)?),
+                _ => {
+                    return Err(format!(
+                        "{key}: `{v}`: a scale search needs SCALE_STEP:SCALE_PULL[:MIN_PSR[:CENTRE_BIAS]]"
+                    ));
+                }
             };
             Some(pftrack::CorrelationCue {
                 padding: num(key, padding)?,
@@ -399,11 +404,12 @@ fn correlation(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
                 scale_step,
                 scale_pull,
                 min_psr,
+                centre_bias,
             })
         }
         _ => {
             return Err(format!(
-                "{key}: `{v}`: expected off, on or PADDING:RATE:LEARN_ABOVE:PULL[:SCALE_STEP:SCALE_PULL]"
+                "{key}: `{v}`: expected off, on or PADDING:RATE:LEARN_ABOVE:PULL[:SCALE_STEP:SCALE_PULL[:MIN_PSR[:CENTRE_BIAS]]]"
             ));
         }
     };

@@ -3,7 +3,7 @@
 
 use host_tests::fixture::Fixture;
 use host_tests::metrics::centre_error;
-use host_tests::scene::{catalogue, generate};
+use host_tests::scene::{Story, catalogue, generate};
 use pftrack::{BoundingBox, Config, Estimate, Event, Frame, Redetect, TrackState, Tracker};
 use std::path::PathBuf;
 
@@ -224,8 +224,12 @@ fn confidence_is_not_high_while_off_target() {
     // target would mean the background looks like the target, which these
     // scenes are built to rule out. The lighting-ramp scene is included:
     // there the tracker may lose the target, but it must not be confident
-    // while doing so.
-    for spec in catalogue() {
+    // while doing so. The crossing scene is left out: its second target
+    // is the first's twin in colour and stripes, so there the background
+    // does look like the target, and after they cross a lone tracker has
+    // only their motion to tell them apart (a group keeps them apart:
+    // groups.rs).
+    for spec in catalogue().into_iter().filter(|s| s.story != Story::Crossing) {
         let fx = load(spec.name);
         let (est, _) = run(&fx, 1);
         for (i, e) in est.iter().enumerate() {

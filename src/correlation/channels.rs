@@ -20,7 +20,7 @@
 //! 255. Every step is in integers and tables, so that a core without an FPU
 //! reads a window as fast as one with it.
 
-use super::filter::LOG_LUMA;
+use super::filter::ln_1p;
 use crate::frame::Frame;
 use crate::pixel::{self, Loop, Loops, PixelRead, RowReader};
 use crate::scalar::{Real, clamp};
@@ -121,7 +121,7 @@ const fn log_grey() -> [u8; 256] {
     let mut out = [0u8; 256];
     let mut l = 0;
     while l < 256 {
-        let v = LOG_LUMA[l] as f64 / LOG_LUMA[255] as f64 * 255.0 + 0.5;
+        let v = ln_1p(l) / ln_1p(255) * 255.0 + 0.5;
         out[l] = v as u8;
         l += 1;
     }

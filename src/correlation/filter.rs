@@ -84,6 +84,26 @@ pub(super) const fn taper<const N: usize>() -> [Real; N] {
     out
 }
 
+/// `sin²(π d / GRID)` of each lattice point `d` of an axis (wrapped: the
+/// points past the middle are the negative shifts), computed at compile
+/// time: how far from no shift a point lies, on the scale of the cosine
+/// window that [`CorrelationCue::centre_bias`] puts on the response.
+const FROM_CENTRE: [Real; GRID] = from_centre();
+
+// Evaluated at compile time only (for a `const`): an index out of range
+// would stop the build, never the device.
+#[allow(clippy::indexing_slicing)]
+const fn from_centre() -> [Real; GRID] {
+    let mut out = [0.0; GRID];
+    let mut i = 0;
+    while i < GRID {
+        let s = sin(core::f64::consts::PI * i as f64 / GRID as f64);
+        out[i] = (s * s) as Real;
+        i += 1;
+    }
+    out
+}
+
 /// The spectrum of the Gaussian peak (σ = [`PEAK_SIGMA`] cells at lattice
 /// point 0, wrapped) along one axis, computed at compile time: the peak is
 /// real and even, so its spectrum is real, `Σₖ g(k) cos(2π u k / GRID)`,
@@ -157,37 +177,49 @@ const fn exp(x: f64) -> f64 {
     sum
 }
 
-/// `ln(1 + l)` for every luma `l`, computed at compile time (the window's
-/// samples are log-luma, as in MOSSE, so that a shadow scales rather than
-/// shifts them; a table spares 2048 logarithms a frame).
-pub(super) const LOG_LUMA: [Real; 256] = log_luma_table();
+/// `ln(1 + l)` for every luma `l` in units of 2^-12 (at most 22,713),
+/// computed at compile time (the window's samples are log-luma, as in
+/// MOSSE, so that a shadow scales rather than shifts them; a table spares
+/// 2048 logarithms a frame). Integers, so that a window's mean and spread
+/// are exact integer sums (the Cortex-M0+'s floating point is in
+/// software), and a unit (0.00024) far below the steps between lumas'
+/// logarithms that a window's spread is made of.
+pub(super) const LOG_LUMA: [u16; 256] = log_luma_table();
+
+/// The units of [`LOG_LUMA`] in one.
+const LOG_LUMA_ONE: Real = 4096.0;
 
 // Evaluated at compile time only (for a `const`): an index out of range
 // would stop the build, never the device.
 #[allow(clippy::indexing_slicing)]
-const fn log_luma_table() -> [Real; 256] {
-    let mut out = [0.0; 256];
+const fn log_luma_table() -> [u16; 256] {
+    let mut out = [0; 256];
     let mut l = 0;
     while l < 256 {
-        // ln(x) = k ln 2 + ln(m), x = m 2^k with m in [1, 2); then
-        // ln(m) = 2 atanh(t), t = (m − 1) / (m + 1) ≤ 1/3, whose series
-        // converges by a factor of 9 a term.
-        let (mut m, mut k) = ((l + 1) as f64, 0);
-        while m >= 2.0 {
-            m /= 2.0;
-            k += 1;
-        }
-        let t = (m - 1.0) / (m + 1.0);
-        let (mut power, mut sum, mut n) = (t, 0.0, 0);
-        while n < 20 {
-            sum += power / (2 * n + 1) as f64;
-            power *= t * t;
-            n += 1;
-        }
-        out[l] = (k as f64 * core::f64::consts::LN_2 + 2.0 * sum) as Real;
+        out[l] = (ln_1p(l) * LOG_LUMA_ONE as f64 + 0.5) as u16;
         l += 1;
     }
     out
+}
+
+/// `ln(1 + l)`, at compile time only.
+pub(super) const fn ln_1p(l: usize) -> f64 {
+    // ln(x) = k ln 2 + ln(m), x = m 2^k with m in [1, 2); then
+    // ln(m) = 2 atanh(t), t = (m − 1) / (m + 1) ≤ 1/3, whose series
+    // converges by a factor of 9 a term.
+    let (mut m, mut k) = ((l + 1) as f64, 0);
+    while m >= 2.0 {
+        m /= 2.0;
+        k += 1;
+    }
+    let t = (m - 1.0) / (m + 1.0);
+    let (mut power, mut sum, mut n) = (t, 0.0, 0);
+    while n < 20 {
+        sum += power / (2 * n + 1) as f64;
+        power *= t * t;
+        n += 1;
+    }
+    k as f64 * core::f64::consts::LN_2 + 2.0 * sum
 }
 
 /// What the filter saw at a window: where its response peaks, and how
@@ -333,9 +365,13 @@ impl CorrelationFilter {
 
     /// Correlates the filter with the window around `e`: where the response
     /// peaks, or `None` before anything is learnt or for a window with no
-    /// texture at all (a flat patch has nothing to correlate).
+    /// texture at all (a flat patch has nothing to correlate). The peak is
+    /// the highest value once each is weighed by `1 − centre_bias ·
+    /// sin²(π d / GRID)` along each axis, `d` its shift in lattice points
+    /// (see [`CorrelationCue::centre_bias`]); its value, sub-cell fit and
+    /// PSR are the response's own.
     #[inline(never)]
-    pub(crate) fn respond(&self, frame: &Frame<'_>, e: &Ellipse, padding: Real) -> Option<Response> {
+    pub(crate) fn respond(&self, frame: &Frame<'_>, e: &Ellipse, padding: Real, centre_bias: Real) -> Option<Response> {
         let mut work = EMPTY;
         if !self.product(&mut work, frame, e, padding) {
             return None;
@@ -349,7 +385,8 @@ impl CorrelationFilter {
         // real part and row b in the imaginary part. The response is stored
         // back two values to a slot (the half spectra are no longer
         // needed); running sums give the PSR.
-        let (mut best, mut at) = (Real::MIN, (0usize, 0usize));
+        let keep = FROM_CENTRE.map(|d| 1.0 - centre_bias * d);
+        let (mut best, mut weighed, mut at) = (Real::MIN, Real::MIN, (0usize, 0usize));
         let (mut s1, mut s2) = (0.0 as Real, 0.0 as Real);
         for (pair_index, rows) in work.chunks_exact_mut(2).enumerate() {
             let [a, b] = rows else { continue };
@@ -363,6 +400,7 @@ impl CorrelationFilter {
             let full = microfft::inverse::ifft_16(&mut full);
             for (half, row) in [a, b].into_iter().enumerate() {
                 let r = 2 * pair_index + half;
+                let keep_row = keep.get(r).copied().unwrap_or(0.0);
                 for (c, (pair, slot)) in full.chunks_exact(2).zip(row.iter_mut()).enumerate() {
                     if let [p, q] = pair {
                         let (u, v) = if half == 0 { (p.re, q.re) } else { (p.im, q.im) };
@@ -370,8 +408,10 @@ impl CorrelationFilter {
                         for (k, v) in [u, v].into_iter().enumerate() {
                             s1 += v;
                             s2 += v * v;
-                            if v > best {
-                                (best, at) = (v, (r, 2 * c + k));
+                            let col = 2 * c + k;
+                            let w = v * keep_row * keep.get(col).copied().unwrap_or(0.0);
+                            if w > weighed {
+                                (best, weighed, at) = (v, w, (r, col));
                             }
                         }
                     }
@@ -538,7 +578,9 @@ fn transform(work: &mut Spectrum, frame: &Frame<'_>, e: &Ellipse, padding: Real)
     for (c, x) in columns.iter_mut().enumerate() {
         *x = crate::scalar::clamp(x0 + (c as Real + 0.5) * w / GRID as Real, 0.0, xmax) as usize;
     }
-    let mut s1 = 0.0 as Real;
+    // The sum and the sum of squares, exact: each sample is below 2^15,
+    // each square below 2^30.
+    let (mut s1, mut s2) = (0u32, 0u64);
     for (r, row) in work.iter_mut().enumerate() {
         let y = crate::scalar::clamp(y0 + (r as Real + 0.5) * h / GRID as Real, 0.0, ymax) as usize;
         let mut luma = [0u8; GRID];
@@ -549,28 +591,29 @@ fn transform(work: &mut Spectrum, frame: &Frame<'_>, e: &Ellipse, padding: Real)
         for (slot, pair) in row.iter_mut().zip(luma.chunks_exact(2)) {
             if let [a, b] = pair {
                 let (a, b) = (log_luma(*a), log_luma(*b));
-                s1 += a;
-                s1 += b;
-                *slot = Complex32::new(a, b);
+                s1 += a + b;
+                s2 += (a * a) as u64 + (b * b) as u64;
+                *slot = Complex32::new(a as Real, b as Real);
             }
         }
     }
-    let mean = s1 / SAMPLES;
-    // A second pass: the sum of squares less the squared sum would
-    // cancel away f32's digits (log-luma near 5, spread near 0.3).
-    let energy: Real = work
-        .iter()
-        .flat_map(|row| row.iter().take(GRID / 2))
-        .map(|v| (v.re - mean) * (v.re - mean) + (v.im - mean) * (v.im - mean))
-        .sum();
+    // `N Σ v² − (Σ v)²`, the spread times `N²`, exact in integers (no
+    // cancellation, as a sum of squares less a squared sum has in `f32`);
+    // then the energy `Σ (v − mean)²` in units of one.
+    let spread = (GRID as u64 * GRID as u64 * s2).saturating_sub(s1 as u64 * s1 as u64);
+    let energy = spread as Real / (SAMPLES * LOG_LUMA_ONE * LOG_LUMA_ONE);
     if !(energy > 1e-6) {
         return false;
     }
-    let scale = 1.0 / sqrt(energy);
+    // Exact: `s1 < 2^23`, and a division by 256 moves the exponent only.
+    let mean = s1 as Real / SAMPLES;
+    // Centred samples (still in the table's units) scale to unit energy.
+    let scale = 1.0 / (sqrt(energy) * LOG_LUMA_ONE);
     // Each row: centred, scaled, tapered, then its real FFT, unpacked
     // into columns 0 to GRID / 2 (the real FFT packs the last one's real
     // value into the first's imaginary part).
     for (row, &tr) in work.iter_mut().zip(TAPER.iter()) {
+        let row_scale = scale * tr;
         let mut line = [0.0 as Real; GRID];
         for (pair, slot) in line.chunks_exact_mut(2).zip(row.iter()) {
             if let [a, b] = pair {
@@ -578,7 +621,7 @@ fn transform(work: &mut Spectrum, frame: &Frame<'_>, e: &Ellipse, padding: Real)
             }
         }
         for (v, &tc) in line.iter_mut().zip(TAPER.iter()) {
-            *v = (*v - mean) * scale * tr * tc;
+            *v = (*v - mean) * row_scale * tc;
         }
         let spectrum = microfft::real::rfft_16(&mut line);
         let (dc, nyquist) = (spectrum[0].re, spectrum[0].im);
@@ -614,9 +657,9 @@ fn transform_columns(work: &mut Spectrum, fft: fn(&mut [Complex32; GRID]) -> &mu
     }
 }
 
-/// `ln(1 + l)`, from the table.
-fn log_luma(l: u8) -> Real {
-    LOG_LUMA.get(l as usize).copied().unwrap_or(0.0)
+/// `ln(1 + l)` in the table's units.
+fn log_luma(l: u8) -> u32 {
+    LOG_LUMA.get(l as usize).copied().unwrap_or(0) as u32
 }
 
 /// The luma of `row`'s pixels at `columns`, in a format whose pixels are
@@ -678,7 +721,7 @@ impl Cue for CorrelationFilter {
         (ellipse, particles): (&mut Ellipse, &mut [Particle; N]),
         search: bool,
     ) -> Option<Real> {
-        let response = self.respond(frame, ellipse, c.padding)?;
+        let response = self.respond(frame, ellipse, c.padding, c.centre_bias)?;
         // A response with no clear peak says nothing of where the target
         // went, nor of its size.
         let sure = response.psr >= c.min_psr;
@@ -783,8 +826,13 @@ mod tests {
             assert!((t as f64 - s * s).abs() < 1e-6, "taper {i}: {t} against {}", s * s);
         }
         for (l, &v) in LOG_LUMA.iter().enumerate() {
+            // Rounded to the nearest unit of 2^-12.
             let e = (l as f64).ln_1p();
-            assert!((v as f64 - e).abs() < 1e-5, "ln(1 + {l}): {v} against {e}");
+            assert!((v as f64 / 4096.0 - e).abs() <= 0.5 / 4096.0 + 1e-9, "ln(1 + {l}): {v} against {e}");
+        }
+        for (d, &v) in FROM_CENTRE.iter().enumerate() {
+            let e = (std::f64::consts::PI * d as f64 / GRID as f64).sin().powi(2);
+            assert!((v as f64 - e).abs() < 1e-6, "sin² at {d}: {v} against {e}");
         }
         for (u, &p) in PEAK.iter().enumerate() {
             let e: f64 = (0..GRID)
@@ -803,7 +851,9 @@ mod tests {
         // Reason: a cross-check of the packed real FFT, the unpacking of
         // its last column and the column FFTs against the DFT's definition,
         // summed directly in f64 over samples prepared as the module's doc
-        // says (nearest pixel, log-luma, unit energy, Hann taper).
+        // says (nearest pixel, log-luma, unit energy, Hann taper). The
+        // window's mean and energy come from exact integer sums there, in
+        // f64 here.
         let px = texture(0.0, 0.0, WAVES);
         let f = frame(&px);
         let e = target();
@@ -816,7 +866,9 @@ mod tests {
             for (c, v) in row.iter_mut().enumerate() {
                 let x = (x0 + (c as f64 + 0.5) * w / GRID as f64).clamp(0.0, (W - 1) as f64) as usize;
                 let y = (y0 + (r as f64 + 0.5) * h / GRID as f64).clamp(0.0, (H - 1) as f64) as usize;
-                *v = (px[y * W + x] as f64).ln_1p();
+                // The table's log-luma (itself checked against std's
+                // `ln_1p` by `the_tables_match_the_functions_they_stand_for`).
+                *v = LOG_LUMA[px[y * W + x] as usize] as f64 / 4096.0;
             }
         }
         let n = (GRID * GRID) as f64;
@@ -892,11 +944,11 @@ mod tests {
         // cell after the sub-cell fit.
         let first = texture(0.0, 0.0, WAVES);
         let mut filter = CorrelationFilter::new();
-        assert_eq!(filter.respond(&frame(&first), &target(), 2.0), None, "nothing learnt yet");
+        assert_eq!(filter.respond(&frame(&first), &target(), 2.0, 0.0), None, "nothing learnt yet");
         filter.learn(&frame(&first), &target(), 2.0, 0.05);
         for (dx, dy) in [(3.0, -2.0), (-5.0, 4.0), (0.0, 0.0)] {
             let moved = texture(dx, dy, WAVES);
-            let r = filter.respond(&frame(&moved), &target(), 2.0).unwrap();
+            let r = filter.respond(&frame(&moved), &target(), 2.0, 0.0).unwrap();
             assert!(
                 (r.shift.0 as f64 - dx).abs() < 1.0 && (r.shift.1 as f64 - dy).abs() < 0.75,
                 "moved by ({dx}, {dy}), found {:?}",
@@ -906,7 +958,7 @@ mod tests {
             // response is flatter than the moved texture's (measured: a
             // PSR of about 3 against 6 to 7).
             let other = texture(0.0, 0.0, OTHER);
-            let o = filter.respond(&frame(&other), &target(), 2.0).unwrap();
+            let o = filter.respond(&frame(&other), &target(), 2.0, 0.0).unwrap();
             assert!(o.psr < 0.6 * r.psr, "PSR {} on an unseen texture against {} on the target", o.psr, r.psr);
         }
     }
@@ -927,7 +979,7 @@ mod tests {
         let (cx, cy) = (4.0, 3.0); // the window's cells: 64 x 48 px over 16
         for (dx, dy) in [(3.0, -2.0), (-5.0, 4.0), (0.0, 0.0), (8.0, 6.0)] {
             let moved = texture(dx, dy, WAVES);
-            let r = filter.respond(&frame(&moved), &target(), 2.0).unwrap();
+            let r = filter.respond(&frame(&moved), &target(), 2.0, 0.0).unwrap();
             let near = filter.peak_near(&frame(&moved), &target(), 2.0, r.shift).unwrap();
             assert!((near - r.peak).abs() <= 1e-5 * r.peak.abs(), "moved by ({dx}, {dy}): {near} against {}", r.peak);
             let away = (r.shift.0 + 5.0 * cx, r.shift.1 + 5.0 * cy);
@@ -963,11 +1015,59 @@ mod tests {
                 .iter()
                 .map(|&s| {
                     let scaled = Ellipse { hx: e.hx * s, hy: e.hy * s, ..e };
-                    filter.respond(&frame(&px), &scaled, 2.0).unwrap().peak
+                    filter.respond(&frame(&px), &scaled, 2.0, 0.0).unwrap().peak
                 })
                 .collect();
             let best = (0..3).max_by(|&a, &b| peaks[a].total_cmp(&peaks[b])).unwrap();
             assert_eq!(best, winner, "zoom {zoom}: peaks {peaks:?} for windows 1.08, 1, 1/1.08");
+        }
+    }
+
+    #[test]
+    fn the_centre_bias_takes_the_highest_weighed_value() {
+        // Reason: an invariant and a cross-check. On a texture the filter
+        // never saw, the response has several peaks of about one height
+        // (PSR about 3); unweighed, `respond` answers the highest, wherever
+        // it lies. Weighed towards no shift, the answer is a value no
+        // higher than that (it bounds the response), at a lattice point no
+        // farther out, and its weighed value, computed here in f64 from
+        // the documented window, is at least the highest value's weighed
+        // value. The unseen texture's highest value lies far out (measured:
+        // 6 lattice points), so the weighed answer must be another point.
+        let first = texture(0.0, 0.0, WAVES);
+        let mut filter = CorrelationFilter::new();
+        filter.learn(&frame(&first), &target(), 2.0, 0.05);
+        let other = texture(0.0, 0.0, OTHER);
+        let (sx, sy) = cell(&target(), 2.0);
+        let point = |r: &Response| (round(r.shift.0 / sx), round(r.shift.1 / sy));
+        let keep = |bias: f64, (c, r): (i32, i32)| {
+            let w = |d: i32| 1.0 - bias * (std::f64::consts::PI * d as f64 / GRID as f64).sin().powi(2);
+            w(c) * w(r)
+        };
+        let far = filter.respond(&frame(&other), &target(), 2.0, 0.0).unwrap();
+        let (fc, fr) = point(&far);
+        assert!(fc.abs().max(fr.abs()) >= 4, "the unseen texture's highest value at {:?}", (fc, fr));
+        let near = filter.respond(&frame(&other), &target(), 2.0, 0.7).unwrap();
+        let (nc, nr) = point(&near);
+        assert!(near.peak <= far.peak, "{} above the highest value {}", near.peak, far.peak);
+        assert!(keep(0.7, (nc, nr)) > keep(0.7, (fc, fr)), "{:?} no nearer than {:?}", (nc, nr), (fc, fr));
+        assert!(
+            keep(0.7, (nc, nr)) * near.peak as f64 >= keep(0.7, (fc, fr)) * far.peak as f64 - 1e-6,
+            "weighed {} at {:?} below {} at {:?}",
+            keep(0.7, (nc, nr)) * near.peak as f64,
+            (nc, nr),
+            keep(0.7, (fc, fr)) * far.peak as f64,
+            (fc, fr)
+        );
+        // A clear match is still found where it lies, even weighed fully
+        // (ground truth: the learnt texture moved by whole pixels).
+        for (dx, dy) in [(3.0, -2.0), (-5.0, 4.0)] {
+            let r = filter.respond(&frame(&texture(dx, dy, WAVES)), &target(), 2.0, 1.0).unwrap();
+            assert!(
+                (r.shift.0 as f64 - dx).abs() < 1.0 && (r.shift.1 as f64 - dy).abs() < 0.75,
+                "moved by ({dx}, {dy}), found {:?}",
+                r.shift
+            );
         }
     }
 
@@ -981,10 +1081,10 @@ mod tests {
         assert!(!filter.learned);
         let px = texture(0.0, 0.0, WAVES);
         filter.learn(&frame(&px), &target(), 2.0, 0.05);
-        assert_eq!(filter.respond(&frame(&flat), &target(), 2.0), None);
+        assert_eq!(filter.respond(&frame(&flat), &target(), 2.0, 0.0), None);
         // A window partly outside the frame repeats the frame's edge
         // rather than reading out of it.
         let corner = Ellipse { cx: 2.0, cy: 3.0, hx: 20.0, hy: 20.0 };
-        assert!(filter.respond(&frame(&px), &corner, 4.0).is_some());
+        assert!(filter.respond(&frame(&px), &corner, 4.0, 0.0).is_some());
     }
 }

@@ -52,7 +52,8 @@ pub(crate) fn validate(settings: Option<CorrelationCue>) -> Result<(), ConfigErr
     check("correlation.pull", c.pull, 0.0, 1.0)?;
     check("correlation.scale_step", c.scale_step, 0.0, 0.2)?;
     check("correlation.scale_pull", c.scale_pull, 0.0, 1.0)?;
-    check("correlation.min_psr", c.min_psr, 0.0, 20.0)
+    check("correlation.min_psr", c.min_psr, 0.0, 20.0)?;
+    check("correlation.centre_bias", c.centre_bias, 0.0, 1.0)
 }
 
 /// A correlation filter (MOSSE) on the grey levels of a window around the
@@ -117,6 +118,15 @@ pub struct CorrelationCue {
     /// own the window's texture is the background's, and a filter that
     /// followed it would hold the box to the background.
     pub min_psr: Real,
+    /// How much the response is weighed towards no shift before its peak
+    /// is taken, in `[0, 1]`: each value is multiplied by `1 − centre_bias
+    /// · sin²(π d / 16)` along each axis, `d` its shift in the window's 16
+    /// lattice points (the cosine window Siamese trackers put on their
+    /// score maps). A far peak must then stand clearly above a near one to
+    /// move the estimate: a striped target's shift by one stripe, or a
+    /// patch of background that matches about as well, no longer wins on a
+    /// hair's difference. 0 takes the highest value wherever it lies.
+    pub centre_bias: Real,
 }
 
 impl CorrelationCue {
@@ -124,7 +134,8 @@ impl CorrelationCue {
     /// (docs/accuracy.md): a window twice the box, learnt at 0.05 on every
     /// frame whose confidence exceeds 0.7, a move 0.7 of the way to the
     /// peak, and a size that moves 0.3 of the way to the best of three
-    /// scales 3% apart, when the response's PSR reaches 3.
+    /// scales 3% apart, when the response's PSR reaches 3; the response
+    /// weighed towards no shift by 0.7.
     pub const MEASURED: CorrelationCue = CorrelationCue {
         padding: 2.0,
         rate: 0.05,
@@ -133,6 +144,7 @@ impl CorrelationCue {
         scale_step: 0.03,
         scale_pull: 0.3,
         min_psr: 3.0,
+        centre_bias: 0.7,
     };
 }
 

@@ -207,6 +207,8 @@ fn the_correlation_filter_needs_its_feature_and_sane_settings() {
         (CorrelationCue { scale_step: 0.5, ..m }, "correlation.scale_step", ParamProblem::OutOfRange),
         (CorrelationCue { scale_pull: Real::NAN, ..m }, "correlation.scale_pull", ParamProblem::NonFinite),
         (CorrelationCue { min_psr: -1.0, ..m }, "correlation.min_psr", ParamProblem::OutOfRange),
+        (CorrelationCue { centre_bias: 1.5, ..m }, "correlation.centre_bias", ParamProblem::OutOfRange),
+        (CorrelationCue { centre_bias: Real::NAN, ..m }, "correlation.centre_bias", ParamProblem::NonFinite),
     ] {
         let err = Tracker::<10>::new(Config { correlation: Some(cue), ..Config::default() }, 1).unwrap_err();
         assert_eq!(err, Error::Config(ConfigError { field, problem }));
