@@ -105,7 +105,7 @@
 
 #if !defined(__LP64__)
 // 64-bit words of a [`pftrack_tracker`] on a 32-bit target.
-#define PFTRACK_TRACKER_WORDS 3080
+#define PFTRACK_TRACKER_WORDS 3081
 #endif
 
 // Bytes of a [`pftrack_tracker`].

@@ -101,7 +101,7 @@ pub const PFTRACK_EVENT_REACQUIRED: u32 = 4;
 pub const PFTRACK_TRACKER_WORDS: usize = 3088;
 /// 64-bit words of a [`pftrack_tracker`] on a 32-bit target.
 #[cfg(not(target_pointer_width = "64"))]
-pub const PFTRACK_TRACKER_WORDS: usize = 3080;
+pub const PFTRACK_TRACKER_WORDS: usize = 3081;
 /// Bytes of a [`pftrack_tracker`].
 pub const PFTRACK_TRACKER_BYTES: usize = PFTRACK_TRACKER_WORDS * 8;
 /// Alignment of a [`pftrack_tracker`], in bytes.
