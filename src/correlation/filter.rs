@@ -70,14 +70,19 @@ const TAPER: [Real; GRID] = taper();
 
 /// The Hann taper `sin²(π (i + ½) / N)` of an axis of `N` lattice points
 /// (this filter's and the gradient filter's tables).
+pub(super) const fn taper<const N: usize>() -> [Real; N] {
+    sin_squared(0.5)
+}
+
+/// `sin²(π (i + offset) / N)` for each of `N` lattice points `i`.
 // Evaluated at compile time only (for a `const`): an index out of range
 // would stop the build, never the device.
 #[allow(clippy::indexing_slicing)]
-pub(super) const fn taper<const N: usize>() -> [Real; N] {
+const fn sin_squared<const N: usize>(offset: f64) -> [Real; N] {
     let mut out = [0.0; N];
     let mut i = 0;
     while i < N {
-        let s = sin(core::f64::consts::PI * (i as f64 + 0.5) / N as f64);
+        let s = sin(core::f64::consts::PI * (i as f64 + offset) / N as f64);
         out[i] = (s * s) as Real;
         i += 1;
     }
@@ -88,21 +93,7 @@ pub(super) const fn taper<const N: usize>() -> [Real; N] {
 /// points past the middle are the negative shifts), computed at compile
 /// time: how far from no shift a point lies, on the scale of the cosine
 /// window that [`CorrelationCue::centre_bias`] puts on the response.
-const FROM_CENTRE: [Real; GRID] = from_centre();
-
-// Evaluated at compile time only (for a `const`): an index out of range
-// would stop the build, never the device.
-#[allow(clippy::indexing_slicing)]
-const fn from_centre() -> [Real; GRID] {
-    let mut out = [0.0; GRID];
-    let mut i = 0;
-    while i < GRID {
-        let s = sin(core::f64::consts::PI * i as f64 / GRID as f64);
-        out[i] = (s * s) as Real;
-        i += 1;
-    }
-    out
-}
+const FROM_CENTRE: [Real; GRID] = sin_squared(0.0);
 
 /// The spectrum of the Gaussian peak (σ = [`PEAK_SIGMA`] cells at lattice
 /// point 0, wrapped) along one axis, computed at compile time: the peak is
