@@ -382,9 +382,10 @@ impl Config {
     /// a confident frame ([`Config::sure_share`]), which pays for part of
     /// the filter. The grey-level filter takes its response's highest value
     /// wherever it lies ([`CorrelationCue::centre_bias`] 0): beside the
-    /// gradient filter the bias lost on the check split. It takes about half as much RAM again as the default
-    /// and more instructions a frame (docs/performance.md); a build without
-    /// the `gradient` feature refuses it by name, as it refuses the filter.
+    /// gradient filter the bias lost on the check split. It takes about
+    /// half as much RAM again as the default and more instructions a frame
+    /// (docs/performance.md); a build without the `gradient` feature
+    /// refuses it by name, as it refuses the filter.
     ///
     /// ```
     /// use pftrack::{Config, ConfigError, Error, ParamProblem, Tracker};

@@ -385,11 +385,13 @@ fn correlation(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
         ["off"] => None,
         ["on"] => Some(pftrack::CorrelationCue::MEASURED),
         [padding, rate, above, pull, scale @ ..] => {
-            let (scale_step, scale_pull, min_psr, centre_bias) = match scale {
+            // The optional fields, each 0 (off) when left out.
+            let scale = scale.iter().map(|s| num(key, s)).collect::<Result<Vec<_>, _>>()?;
+            let (scale_step, scale_pull, min_psr, centre_bias) = match *scale.as_slice() {
                 [] => (0.0, 0.0, 0.0, 0.0),
-                [step, pull] => (num(key, step)?, num(key, pull)?, 0.0, 0.0),
-                [step, pull, psr] => (num(key, step)?, num(key, pull)?, num(key, psr)?, 0.0),
-                [step, pull, psr, bias] => (num(key, step)?, num(key, pull)?, num(key, psr)?, num(key, bias)?),
+                [step, pull] => (step, pull, 0.0, 0.0),
+                [step, pull, psr] => (step, pull, psr, 0.0),
+                [step, pull, psr, bias] => (step, pull, psr, bias),
                 _ => {
                     return Err(format!(
                         "{key}: `{v}`: a scale search needs SCALE_STEP:SCALE_PULL[:MIN_PSR[:CENTRE_BIAS]]"
