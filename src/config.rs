@@ -105,8 +105,8 @@ pub struct Config {
     /// [`Life::Confidence`], which updates only above `found_above`, the
     /// gate then closes on no frame of the real sequences that the
     /// confidence trusts (a tighter gate kept a 5-pixel target's model from
-    /// following it as it grew; docs/accuracy.md), and it still keeps the
-    /// model still while the fixtures' target is hidden.
+    /// following it as it grew; docs/accuracy.md), and on its own it keeps
+    /// the model unchanged while the fixtures' target is hidden.
     pub update_sigma: Real,
     /// A particle "appears" (sees the target) when its `ρ` exceeds the
     /// background mean by this many background standard deviations (the paper's 2).
