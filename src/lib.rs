@@ -94,7 +94,7 @@ pub mod tracker;
 
 pub use boundary::BoundaryCue;
 pub use colour::Binning;
-pub use config::{Config, Life, ModelUpdate, Redetect, ShiftSearch, SizeSearch, TableMode, TemplateCue};
+pub use config::{Config, Life, LostSearch, ModelUpdate, Redetect, ShiftSearch, SizeSearch, TableMode, TemplateCue};
 pub use correlation::{CorrelationCue, GradientCue};
 pub use edges::{EDGE_SUPPORT_WORDS, EdgeCue, EdgeMap, EdgeParams, MAX_EDGE_BINS};
 pub use error::{ChromaPlane, ConfigError, Error, FrameError, ParamProblem, RegionError};

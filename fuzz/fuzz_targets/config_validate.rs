@@ -2,9 +2,9 @@
 //! refuses them, or a tracker can be built and run with them.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
-use pftrack::{BoundingBox, Config, Frame, PixelFormat, Sigma, Tracker};
+use pftrack::{BoundingBox, Config, Frame, LostSearch, PixelFormat, Sigma, Tracker};
 
-fuzz_target!(|v: [f32; 16]| {
+fuzz_target!(|v: [f32; 17]| {
     let mut c = Config::default();
     c.likelihood.sigma = if v[0] >= 0.0 { Sigma::Fixed(v[1]) } else { Sigma::Adaptive { min: v[1], max: v[2] } };
     c.likelihood.eps = v[3];
@@ -20,6 +20,9 @@ fuzz_target!(|v: [f32; 16]| {
     c.min_half_axis = v[13];
     c.dynamics.speed_noise = v[14];
     c.sure_share = v[15];
+    // Lost after one miss, so that the steps below reach the lost search.
+    c.lost_search = LostSearch::Widening { growth: v[16] };
+    c.lost_after = 1;
     if c.validate().is_err() {
         assert!(Tracker::<8>::new(c, 1).is_err(), "the constructor validates too");
         return;

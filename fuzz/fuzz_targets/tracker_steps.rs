@@ -5,8 +5,8 @@
 #![no_main]
 use libfuzzer_sys::fuzz_target;
 use pftrack::{
-    Binning, BoundaryCue, BoundingBox, Config, Frame, GradientCue, MeanShift, MeanShiftConfig, ModelUpdate, PixelFormat,
-    Redetect, ScalePrior, Shape, Similarity, TableMode, Tracker,
+    Binning, BoundaryCue, BoundingBox, Config, Frame, GradientCue, LostSearch, MeanShift, MeanShiftConfig, ModelUpdate,
+    PixelFormat, Redetect, ScalePrior, Shape, Similarity, TableMode, Tracker,
 };
 use rand_xoshiro::Xoshiro128PlusPlus;
 
@@ -22,7 +22,9 @@ fn config(pick: u8) -> Config {
         6 => Config { boundary: Some(BoundaryCue { weight: 0.3 }), ..d },
         7 => Config { scene_motion: !d.scene_motion, ..d },
         8 => Config { sure_share: 0.3, ..d },
-        9 => Config { redetect: Redetect::Frame, ..d },
+        // Lost after one miss, so that the few steps reach the lost
+        // search: the re-detection's spots within a widening square.
+        9 => Config { redetect: Redetect::Frame, lost_search: LostSearch::Widening { growth: 10.0 }, lost_after: 1, ..d },
         // The gradient filter in place of the grey-level one, and beside
         // it with its response blended into the particles' similarities.
         10 => Config { gradient: Some(GradientCue::MEASURED), correlation: None, ..d },

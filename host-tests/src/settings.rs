@@ -3,8 +3,8 @@
 //! validated by the core afterwards, so this only parses.
 
 use pftrack::{
-    Binning, Combination, Config, EdgeCue, Life, ModelUpdate, Redetect, Resampling, Sampling, Shape, Sigma, Similarity,
-    SizeSearch,
+    Binning, Combination, Config, EdgeCue, Life, LostSearch, ModelUpdate, Redetect, Resampling, Sampling, Shape, Sigma,
+    Similarity, SizeSearch,
 };
 
 /// Parses one key's value into the configuration; given the key, for its
@@ -99,6 +99,12 @@ pub const KEYS: &[Key] = &[
         redetect,
     ),
     key(
+        "lost_search",
+        "frame | widening:GROWTH (where a lost target is looked for: anywhere, or within 4 of its larger half axes of \
+         where it was last found, plus GROWTH half axes for each frame since)",
+        lost_search,
+    ),
+    key(
         "scene_motion",
         "on | off (a box that moves with its surroundings counts as a miss, for a target seen to move)",
         |c, k, v| set(&mut c.scene_motion, on_off(k, v)),
@@ -177,6 +183,15 @@ fn sampling(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
 fn redetect(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
     let options = [("off", Redetect::Off), ("near", Redetect::Near), ("frame", Redetect::Frame)];
     set(&mut c.redetect, choice(key, v, &options))
+}
+
+fn lost_search(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
+    let search = match v.split_once(':') {
+        Some(("widening", growth)) => LostSearch::Widening { growth: num(key, growth)? },
+        _ if v == "frame" => LostSearch::Frame,
+        _ => return Err(format!("{key}: `{v}`: expected frame or widening:GROWTH")),
+    };
+    set(&mut c.lost_search, Ok(search))
 }
 
 fn resampling(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
@@ -457,6 +472,7 @@ mod tests {
                 "shift" => "0.1:2:1:0.5",
                 "life" => "appearance",
                 "redetect" => "frame",
+                "lost_search" => "widening:0.05",
                 "scene_motion" => "off",
                 "correlation" => "off",
                 "gradient" => "on",

@@ -92,6 +92,7 @@ pub(crate) struct Track<const N: usize, const K: usize, R, const T: usize> {
     /// The likelihood table (table mode only; zero-sized when `T` is 0).
     table: Table<T>,
     state: TrackState,
+    /// Frames since the target was last found (none while searching).
     misses: u16,
     /// Whether a step has found the target since it was learnt: until one
     /// has, nothing is known of its motion, and a step that misses it
@@ -311,7 +312,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         let (w, h) = (frame.width(), frame.height());
         let (hx, hy) = self.target.as_ref().map_or((1.0, 1.0), |t| t.half_axes);
         for p in self.particles.iter_mut() {
-            *p = uniform_particle(&mut self.rng, w, h, hx, hy);
+            *p = uniform_particle(&mut self.rng, (0.0, 0.0, w as Real, h as Real), hx, hy);
         }
         self.weights = [1.0 / N as Real; N];
         self.state = TrackState::Searching;
@@ -371,6 +372,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
             initial_axes: (e.hx.max(cfg.min_half_axis), e.hy.max(cfg.min_half_axis)),
             rho0: (0.0, 0),
             centre: (e.cx, e.cy),
+            found_at: (e.cx, e.cy),
             speed: 0.0,
         });
         let m = &mut target.models;

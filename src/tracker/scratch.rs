@@ -58,6 +58,9 @@ pub(super) struct Target<const K: usize> {
     pub(super) rho0: (Real, u16),
     /// The last estimate's centre.
     pub(super) centre: (Real, Real),
+    /// The centre of the last estimate that found the target, where a lost
+    /// one is looked for ([`crate::LostSearch::Widening`]).
+    pub(super) found_at: (Real, Real),
     /// The target's recent speed, pixels a frame: the estimate's
     /// displacement between tracking frames, smoothed (for
     /// [`crate::Dynamics::speed_noise`]).

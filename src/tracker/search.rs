@@ -189,9 +189,10 @@ pub(super) fn redetect<const K: usize>(
     best.map(|b| b.map(|(x, y, _)| (x, y)))
 }
 
-/// A particle at rest anywhere in a `width × height` frame.
-pub(super) fn uniform_particle<R: Rng>(rng: &mut R, width: usize, height: usize, hx: Real, hy: Real) -> Particle {
-    let x = unit_from_bits(rng.next_u32()) * width as Real;
-    let y = unit_from_bits(rng.next_u32()) * height as Real;
+/// A particle at rest anywhere in `area` (`x0, y0, x1, y1`).
+pub(super) fn uniform_particle<R: Rng>(rng: &mut R, area: (Real, Real, Real, Real), hx: Real, hy: Real) -> Particle {
+    let (x0, y0, x1, y1) = area;
+    let x = x0 + unit_from_bits(rng.next_u32()) * (x1 - x0);
+    let y = y0 + unit_from_bits(rng.next_u32()) * (y1 - y0);
     Particle { x, y, hx, hy, ..Default::default() }
 }

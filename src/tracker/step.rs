@@ -5,7 +5,7 @@ use super::scratch::*;
 use super::search::*;
 use super::{ScalePrior, Track, Tracker};
 use crate::apart::{Alone, Apart};
-use crate::config::{Life, ModelUpdate, Redetect};
+use crate::config::{Life, LostSearch, ModelUpdate, Redetect};
 use crate::error::Error;
 use crate::estimate::{Diagnostics, Estimate, Event, TrackState};
 use crate::filter::{Bounds, Particle, mean_state, resample, scale_estimate, shift_estimate};
@@ -122,13 +122,24 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
             return;
         }
         let reseed = (cfg.reseed_fraction * N as Real) as usize;
+        // Where a target not tracked may be: anywhere, or about where it
+        // was last found.
+        let whole = (0.0, 0.0, w as Real, h as Real);
+        let search = match cfg.lost_search {
+            LostSearch::Widening { growth } if *state == TrackState::Lost => {
+                let (cx, cy) = target.found_at;
+                let reach = (NEAR_REACH + growth * *misses as Real) * hx.max(hy);
+                ((cx - reach).max(0.0), (cy - reach).max(0.0), (cx + reach).min(whole.2), (cy + reach).min(whole.3))
+            }
+            _ => whole,
+        };
         // Where to look: one call, so that the scan is built once.
         let area = if near {
             let (cx, cy) = target.centre;
             let reach = NEAR_REACH * hx.max(hy);
             Some((cx - reach, cy - reach, cx + reach, cy + reach))
         } else {
-            (cfg.redetect == Redetect::Frame).then_some((0.0, 0.0, w as Real, h as Real))
+            (cfg.redetect == Redetect::Frame).then_some(search)
         };
         let spots = match area {
             Some(area) => redetect(&mut scratch.fgmap, frame, &target.models, (hx, hy), area),
@@ -157,7 +168,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
                 // Near the target, only the places: the rest of the set
                 // goes on tracking.
                 None if near => continue,
-                None => uniform_particle(rng, w, h, hx, hy),
+                None => uniform_particle(rng, search, hx, hy),
             };
         }
     }
@@ -363,6 +374,9 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
             target.speed += SPEED_RATE * (sqrt(dx * dx + dy * dy) - target.speed);
         }
         target.centre = (e.cx, e.cy);
+        if self.state == TrackState::Tracking && self.misses == 0 {
+            target.found_at = target.centre;
+        }
     }
 
     /// Moves the state machine on whether the target was found this frame.
@@ -385,7 +399,11 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
                 self.misses = 0;
                 Some(event)
             }
-            TrackState::Searching | TrackState::Lost => None,
+            TrackState::Lost => {
+                self.misses = self.misses.saturating_add(1);
+                None
+            }
+            TrackState::Searching => None,
         }
     }
 

@@ -1,6 +1,6 @@
 use super::*;
 use crate::colour::Binning;
-use crate::config::{ModelUpdate, Redetect};
+use crate::config::{LostSearch, ModelUpdate, Redetect};
 use crate::correlation::CorrelationCue;
 use crate::edges::EdgeCue;
 use crate::frame::PixelFormat;
@@ -555,5 +555,72 @@ fn the_gradient_filter_follows_a_texture_colour_cannot_place() {
         let (cx, cy) = e.bbox().centre();
         let (x, y) = (60.0 + 2.0 * k as Real, 45.0 + k as Real);
         assert!((cx - x).abs() <= 2.0 && (cy - y).abs() <= 2.0, "frame {k}: ({cx}, {cy}) against ({x}, {y})");
+    }
+}
+
+/// A grey 320x240 RGB888 frame with, where asked, the four-coloured
+/// 16x16 target at (40, 112) and a copy of it, the look-alike, at
+/// (264, 112).
+fn wide_scene(target: bool, lookalike: bool) -> Vec<u8> {
+    const WW: usize = 320;
+    let mut px = vec![100u8; WW * 240 * 3];
+    let colours = [[220, 30, 30], [30, 200, 30], [30, 30, 220], [220, 220, 30]];
+    let places = [(target, 40), (lookalike, 264)];
+    for (x0, y0) in places.iter().filter(|p| p.0).map(|p| (p.1, 112)) {
+        for y in y0..y0 + 16 {
+            for x in x0..x0 + 16 {
+                let q = (x >= x0 + 8) as usize + 2 * (y >= y0 + 8) as usize;
+                px[(y * WW + x) * 3..][..3].copy_from_slice(&colours[q]);
+            }
+        }
+    }
+    px
+}
+
+#[test]
+fn a_widening_search_finds_the_target_again_where_it_was_lost() {
+    // Reason: ground truth of the generated scene, and the square's
+    // definition. The target vanishes for 20 frames (the tracker loses
+    // it after `lost_after` of them), then reappears where it was, while
+    // an identical look-alike appears 224 px away. With a square growing
+    // by 0.05 of the 8 px half axis a frame from 4 half axes, it reaches
+    // (4 + 0.05 · 40) · 8 = 48 px from the last place by the end: no
+    // particle is re-drawn near the look-alike, so on every seed the
+    // tracker is found again on the target. The whole frame's search (the
+    // default) draws particles over both: on seed 2 it is not found again
+    // within the 20 frames.
+    let px = |t, l| wide_scene(t, l);
+    fn f(p: &[u8]) -> Frame<'_> {
+        Frame::packed(p, 320, 240, PixelFormat::Rgb888).unwrap()
+    }
+    let (both, none) = (px(true, true), px(false, false));
+    let cfg = Config { lost_search: LostSearch::Widening { growth: 0.05 }, ..Config::default() };
+    for seed in 1..=8 {
+        let mut t: Tracker<100> = Tracker::new(cfg, seed).unwrap();
+        t.init(&f(&px(true, false)), BoundingBox::new(40.0, 112.0, 16.0, 16.0)).unwrap();
+        for _ in 0..5 {
+            assert_eq!(t.step(&f(&px(true, false))).unwrap().state, TrackState::Tracking, "seed {seed}");
+        }
+        let lost = (0..20).map(|_| t.step(&f(&none)).unwrap().state).filter(|s| *s == TrackState::Lost).count();
+        assert!(lost >= 10, "seed {seed}: lost on {lost} of 20 frames");
+        let mut found = None;
+        for i in 0..20 {
+            let e = t.step(&f(&both)).unwrap();
+            if e.state == TrackState::Tracking {
+                found = Some((i, e.ellipse));
+                break;
+            }
+        }
+        let (i, e) = found.unwrap_or_else(|| panic!("seed {seed}: not found again"));
+        assert!((e.cx - 48.0).abs() < 4.0 && (e.cy - 120.0).abs() < 4.0, "seed {seed}, frame {i}: {e:?}");
+    }
+}
+
+#[test]
+fn the_widening_search_is_validated() {
+    // Reason: the documented range of the growth, [0, 10].
+    for (growth, ok) in [(0.0, true), (10.0, true), (-0.1, false), (10.5, false), (Real::NAN, false)] {
+        let cfg = Config { lost_search: LostSearch::Widening { growth }, ..Config::default() };
+        assert_eq!(cfg.validate().is_ok(), ok, "growth {growth}");
     }
 }
