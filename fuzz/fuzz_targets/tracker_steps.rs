@@ -24,7 +24,9 @@ fn config(pick: u8) -> Config {
         8 => Config { sure_share: 0.3, ..d },
         // Lost after one miss, so that the few steps reach the lost
         // search: the re-detection's spots within a widening square.
-        9 => Config { redetect: Redetect::Frame, lost_search: LostSearch::Widening { growth: 10.0 }, lost_after: 1, ..d },
+        9 => {
+            Config { redetect: Redetect::Frame, lost_search: LostSearch::Widening { growth: 10.0 }, lost_after: 1, ..d }
+        }
         // The gradient filter in place of the grey-level one, and beside
         // it with its response blended into the particles' similarities.
         10 => Config { gradient: Some(GradientCue::MEASURED), correlation: None, ..d },

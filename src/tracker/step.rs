@@ -125,10 +125,11 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         // Where a target not tracked may be: anywhere, or about where it
         // was last found.
         let whole = (0.0, 0.0, w as Real, h as Real);
+        let big = hx.max(hy);
         let search = match cfg.lost_search {
             LostSearch::Widening { growth } if *state == TrackState::Lost => {
                 let (cx, cy) = target.found_at;
-                let reach = (NEAR_REACH + growth * *misses as Real) * hx.max(hy);
+                let reach = (NEAR_REACH + growth * *misses as Real) * big;
                 ((cx - reach).max(0.0), (cy - reach).max(0.0), (cx + reach).min(whole.2), (cy + reach).min(whole.3))
             }
             _ => whole,
@@ -136,7 +137,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         // Where to look: one call, so that the scan is built once.
         let area = if near {
             let (cx, cy) = target.centre;
-            let reach = NEAR_REACH * hx.max(hy);
+            let reach = NEAR_REACH * big;
             Some((cx - reach, cy - reach, cx + reach, cy + reach))
         } else {
             (cfg.redetect == Redetect::Frame).then_some(search)
