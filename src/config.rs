@@ -181,7 +181,8 @@ pub struct Config {
     /// a miss, for a target that moved against them over its first frames
     /// (the `motion` module, built with the `scene-motion` feature, a
     /// default one): a box left on the background by a panning camera is
-    /// reported lost. On in [`Config::default`] where built: on the real
+    /// reported lost, and its reported confidence halved. On in
+    /// [`Config::default`] where built: on the real
     /// sequences it reports many more of the missing frames at the same
     /// accuracy (docs/accuracy.md), for a small share of a QVGA frame's
     /// instructions on a Cortex-M4F (audit/budgets.txt). Asking for it

@@ -41,7 +41,9 @@ pub struct Estimate {
     /// [`crate::Life::Confidence`] (the default), the probability that the
     /// estimate is on its target, from how much it stands out from its
     /// surroundings, its correlation with the first template and its
-    /// colour similarity with the first model (see [`crate::on_target`]); with
+    /// colour similarity with the first model (see [`crate::on_target`]),
+    /// halved on a frame where the box moves with its surroundings
+    /// ([`crate::Config::scene_motion`]); with
     /// [`crate::Life::Appearance`], the similarity between the model and the
     /// estimate (the Bhattacharyya coefficient, combined over colour and
     /// edges, see [`crate::Combination::similarity`]).

@@ -1,6 +1,6 @@
 //! One step: predict, observe, estimate, the life cycle, adapt.
 
-use super::confidence::{SPEED_RATE, TYPICAL_CONTRAST, on_target};
+use super::confidence::{MOVES_WITH_SCENE, SPEED_RATE, TYPICAL_CONTRAST, on_target};
 use super::scratch::*;
 use super::search::*;
 use super::{ScalePrior, Track, Tracker};
@@ -73,7 +73,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         let model_updated = self.adapt(scratch, frame, &look, event);
         Ok(Estimate {
             ellipse: look.ellipse,
-            confidence: look.confidence,
+            confidence: if stuck { look.confidence * MOVES_WITH_SCENE } else { look.confidence },
             state: self.state,
             event,
             appearing: observed.appearing,
