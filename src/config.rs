@@ -55,8 +55,11 @@ pub enum LostSearch {
     /// small bird in a flock, a car at night) is most often still near
     /// where it was last seen, and is found again there before a far
     /// look-alike draws the particles away; one that reappears far away is
-    /// found once the square has grown to it. It trades the confidence's
-    /// ranking of the misses for accuracy (docs/accuracy.md).
+    /// found once the square has grown to it. A target last found at the
+    /// frame's edge (its box within a half axis of it) may have left the
+    /// view and come back anywhere: it is looked for over the whole frame.
+    /// It trades the confidence's ranking of the misses for accuracy
+    /// (docs/accuracy.md).
     Widening {
         /// Half axes the square's half side grows by each frame, in `[0, 10]`.
         growth: Real,

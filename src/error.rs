@@ -246,7 +246,10 @@ impl core::error::Error for RegionError {}
 impl core::error::Error for Error {}
 
 /// `v` must be finite and in `[lo, hi]`; the error names `field`. The one
-/// range check of every configuration in the crate.
+/// range check of every configuration in the crate. Out of line: inlined at
+/// each of its calls, it would take flash for no speed that matters (a
+/// configuration is checked once).
+#[inline(never)]
 pub(crate) fn check(field: &'static str, v: Real, lo: Real, hi: Real) -> Result<(), ConfigError> {
     if !v.is_finite() {
         return Err(ConfigError { field, problem: ParamProblem::NonFinite });

@@ -122,26 +122,29 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
             return;
         }
         let reseed = (cfg.reseed_fraction * N as Real) as usize;
-        // Where a target not tracked may be: anywhere, or about where it
-        // was last found.
         let whole = (0.0, 0.0, w as Real, h as Real);
-        let big = hx.max(hy);
-        let search = match cfg.lost_search {
-            LostSearch::Widening { growth } if *state == TrackState::Lost => {
-                let (cx, cy) = target.found_at;
-                let reach = (NEAR_REACH + growth * *misses as Real) * big;
-                ((cx - reach).max(0.0), (cy - reach).max(0.0), (cx + reach).min(whole.2), (cy + reach).min(whole.3))
-            }
-            _ => whole,
+        // A lost target is looked for about where it was last found
+        // (`LostSearch::Widening`), unless that was at the frame's edge
+        // (within a half axis): it may have left the view there, and may
+        // come back anywhere.
+        let (fx, fy) = target.found_at;
+        let inside = fx > 2.0 * hx && fy > 2.0 * hy && fx + 2.0 * hx < whole.2 && fy + 2.0 * hy < whole.3;
+        let widening = match cfg.lost_search {
+            LostSearch::Widening { growth } if *state == TrackState::Lost && inside => Some(growth * *misses as Real),
+            _ => None,
+        };
+        // One square serves both searches near the target: about its last
+        // estimate after a miss (`Redetect::Near`), or, lost, about where it
+        // was last found, widening.
+        let ((cx, cy), more) = if near { (target.centre, 0.0) } else { ((fx, fy), widening.unwrap_or(0.0)) };
+        let reach = (NEAR_REACH + more) * hx.max(hy);
+        let square = (cx - reach, cy - reach, cx + reach, cy + reach);
+        let search = match widening {
+            Some(_) => (square.0.max(0.0), square.1.max(0.0), square.2.min(whole.2), square.3.min(whole.3)),
+            None => whole,
         };
         // Where to look: one call, so that the scan is built once.
-        let area = if near {
-            let (cx, cy) = target.centre;
-            let reach = NEAR_REACH * big;
-            Some((cx - reach, cy - reach, cx + reach, cy + reach))
-        } else {
-            (cfg.redetect == Redetect::Frame).then_some(search)
-        };
+        let area = if near { Some(square) } else { (cfg.redetect == Redetect::Frame).then_some(search) };
         let spots = match area {
             Some(area) => redetect(&mut scratch.fgmap, frame, &target.models, (hx, hy), area),
             None => [None; SPOTS],

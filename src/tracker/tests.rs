@@ -626,6 +626,7 @@ fn the_widening_search_is_validated() {
 }
 
 #[test]
+#[cfg(feature = "scene-motion")]
 fn a_box_that_moves_with_a_panning_scene_reports_half_its_confidence() {
     // Reason: the rule's definition. The four-coloured target walks 2 px
     // a frame over a still textured scene for 30 frames (the motion test
@@ -684,4 +685,48 @@ fn a_box_that_moves_with_a_panning_scene_reports_half_its_confidence() {
         }
     }
     assert!(halved >= 10, "the test flagged {halved} of the 30 panning frames");
+}
+
+#[test]
+fn a_target_lost_at_the_frame_s_edge_is_looked_for_everywhere() {
+    // Reason: ground truth of the generated scene, and the rule's
+    // definition. The target is tracked at the right edge (its box within
+    // a half axis of it), vanishes for 20 frames, and comes back at the
+    // left edge, 256 px away, out of reach of any square about where it
+    // was lost ((4 + 0.05 · 40) · 8 = 48 px). Found at the edge, it is
+    // looked for over the whole frame: with the re-detection's spots there
+    // (`Redetect::Frame`), every seed finds it again on the target.
+    const WW: usize = 320;
+    let scene = |x0: Option<usize>| {
+        let mut px = vec![100u8; WW * 240 * 3];
+        let colours = [[220, 30, 30], [30, 200, 30], [30, 30, 220], [220, 220, 30]];
+        if let Some(x0) = x0 {
+            for y in 112..128 {
+                for x in x0..x0 + 16 {
+                    let q = (x >= x0 + 8) as usize + 2 * (y >= 120) as usize;
+                    px[(y * WW + x) * 3..][..3].copy_from_slice(&colours[q]);
+                }
+            }
+        }
+        px
+    };
+    fn f(p: &[u8]) -> Frame<'_> {
+        Frame::packed(p, 320, 240, PixelFormat::Rgb888).unwrap()
+    }
+    let (right, none, left) = (scene(Some(300)), scene(None), scene(Some(4)));
+    let cfg =
+        Config { lost_search: LostSearch::Widening { growth: 0.05 }, redetect: Redetect::Frame, ..Config::default() };
+    for seed in 1..=8 {
+        let mut t: Tracker<100> = Tracker::new(cfg, seed).unwrap();
+        t.init(&f(&right), BoundingBox::new(300.0, 112.0, 16.0, 16.0)).unwrap();
+        for _ in 0..5 {
+            assert_eq!(t.step(&f(&right)).unwrap().state, TrackState::Tracking, "seed {seed}");
+        }
+        let lost = (0..20).map(|_| t.step(&f(&none)).unwrap().state).filter(|s| *s == TrackState::Lost).count();
+        assert!(lost >= 10, "seed {seed}: lost on {lost} of 20 frames");
+        let found = (0..20).map(|_| t.step(&f(&left)).unwrap()).find(|e| e.state == TrackState::Tracking);
+        let e = found.unwrap_or_else(|| panic!("seed {seed}: not found again")).ellipse;
+        // On the target: its centre within a half axis of the truth's.
+        assert!((e.cx - 12.0).abs() < 8.0 && (e.cy - 120.0).abs() < 8.0, "seed {seed}: {e:?}");
+    }
 }
