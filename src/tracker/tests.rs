@@ -14,14 +14,7 @@ const H: usize = 90;
 /// (x, y, w, h) over it.
 fn scene(cover: Option<(usize, usize, usize, usize)>, shade: u8) -> Vec<u8> {
     let mut px = vec![100u8; W * H * 3];
-    let colours = [[220, 30, 30], [30, 200, 30], [30, 30, 220], [220, 220, 30]];
-    for y in 29..61 {
-        for x in 44..76 {
-            let q = (x >= 60) as usize + 2 * (y >= 45) as usize;
-            let c = colours[q].map(|v: u8| v.saturating_sub(shade));
-            px[(y * W + x) * 3..][..3].copy_from_slice(&c);
-        }
-    }
+    paint_target(&mut px, W, (44, 29), 32, shade);
     if let Some((cx, cy, cw, ch)) = cover {
         for y in cy..cy + ch {
             for x in cx..cx + cw {
@@ -34,6 +27,20 @@ fn scene(cover: Option<(usize, usize, usize, usize)>, shade: u8) -> Vec<u8> {
 
 fn frame(px: &[u8]) -> Frame<'_> {
     Frame::packed(px, W, H, PixelFormat::Rgb888).unwrap()
+}
+
+/// Paints the four-coloured target (red, green, blue and yellow
+/// quadrants, darkened by `shade`), `size` px square with its top-left
+/// corner at `(x0, y0)`, into an RGB888 frame `width` px wide.
+fn paint_target(px: &mut [u8], width: usize, (x0, y0): (usize, usize), size: usize, shade: u8) {
+    let colours = [[220, 30, 30], [30, 200, 30], [30, 30, 220], [220, 220, 30]];
+    for y in y0..y0 + size {
+        for x in x0..x0 + size {
+            let q = (x >= x0 + size / 2) as usize + 2 * (y >= y0 + size / 2) as usize;
+            let c = colours[q].map(|v: u8| v.saturating_sub(shade));
+            px[(y * width + x) * 3..][..3].copy_from_slice(&c);
+        }
+    }
 }
 
 const BOX: BoundingBox = BoundingBox::new(44.0, 29.0, 32.0, 32.0);
@@ -558,23 +565,37 @@ fn the_gradient_filter_follows_a_texture_colour_cannot_place() {
     }
 }
 
-/// A grey 320x240 RGB888 frame with, where asked, the four-coloured
-/// 16x16 target at (40, 112) and a copy of it, the look-alike, at
-/// (264, 112).
-fn wide_scene(target: bool, lookalike: bool) -> Vec<u8> {
-    const WW: usize = 320;
-    let mut px = vec![100u8; WW * 240 * 3];
-    let colours = [[220, 30, 30], [30, 200, 30], [30, 30, 220], [220, 220, 30]];
-    let places = [(target, 40), (lookalike, 264)];
-    for (x0, y0) in places.iter().filter(|p| p.0).map(|p| (p.1, 112)) {
-        for y in y0..y0 + 16 {
-            for x in x0..x0 + 16 {
-                let q = (x >= x0 + 8) as usize + 2 * (y >= y0 + 8) as usize;
-                px[(y * WW + x) * 3..][..3].copy_from_slice(&colours[q]);
-            }
-        }
+/// A grey 320x240 RGB888 frame with the four-coloured 16x16 target at
+/// each of the lefts `at`, top 112.
+fn wide_scene(at: &[usize]) -> Vec<u8> {
+    let mut px = vec![100u8; 320 * 240 * 3];
+    for &x0 in at {
+        paint_target(&mut px, 320, (x0, 112), 16, 0);
     }
     px
+}
+
+fn wide_frame(px: &[u8]) -> Frame<'_> {
+    Frame::packed(px, 320, 240, PixelFormat::Rgb888).unwrap()
+}
+
+/// Under `cfg` and `seed`: learns the target of `start` in `seen` and
+/// tracks it there for 5 frames, then loses it over 20 empty frames (lost
+/// on at least 10 of them), then steps on `back` for up to 20 frames: the
+/// frame and estimate on which it is tracked again, if it is.
+fn lost_and_found(cfg: Config, seed: u64, start: BoundingBox, seen: &[u8], back: &[u8]) -> Option<(usize, Ellipse)> {
+    let none = wide_scene(&[]);
+    let mut t: Tracker<100> = Tracker::new(cfg, seed).unwrap();
+    t.init(&wide_frame(seen), start).unwrap();
+    for _ in 0..5 {
+        assert_eq!(t.step(&wide_frame(seen)).unwrap().state, TrackState::Tracking, "seed {seed}");
+    }
+    let lost = (0..20).map(|_| t.step(&wide_frame(&none)).unwrap().state).filter(|s| *s == TrackState::Lost).count();
+    assert!(lost >= 10, "seed {seed}: lost on {lost} of 20 frames");
+    (0..20)
+        .map(|i| (i, t.step(&wide_frame(back)).unwrap()))
+        .find(|(_, e)| e.state == TrackState::Tracking)
+        .map(|(i, e)| (i, e.ellipse))
 }
 
 #[test]
@@ -589,28 +610,11 @@ fn a_widening_search_finds_the_target_again_where_it_was_lost() {
     // tracker is found again on the target. The whole frame's search (the
     // default) draws particles over both: on seed 2 it is not found again
     // within the 20 frames.
-    let px = |t, l| wide_scene(t, l);
-    fn f(p: &[u8]) -> Frame<'_> {
-        Frame::packed(p, 320, 240, PixelFormat::Rgb888).unwrap()
-    }
-    let (both, none) = (px(true, true), px(false, false));
+    let (seen, both) = (wide_scene(&[40]), wide_scene(&[40, 264]));
     let cfg = Config { lost_search: LostSearch::Widening { growth: 0.05 }, ..Config::default() };
+    let start = BoundingBox::new(40.0, 112.0, 16.0, 16.0);
     for seed in 1..=8 {
-        let mut t: Tracker<100> = Tracker::new(cfg, seed).unwrap();
-        t.init(&f(&px(true, false)), BoundingBox::new(40.0, 112.0, 16.0, 16.0)).unwrap();
-        for _ in 0..5 {
-            assert_eq!(t.step(&f(&px(true, false))).unwrap().state, TrackState::Tracking, "seed {seed}");
-        }
-        let lost = (0..20).map(|_| t.step(&f(&none)).unwrap().state).filter(|s| *s == TrackState::Lost).count();
-        assert!(lost >= 10, "seed {seed}: lost on {lost} of 20 frames");
-        let mut found = None;
-        for i in 0..20 {
-            let e = t.step(&f(&both)).unwrap();
-            if e.state == TrackState::Tracking {
-                found = Some((i, e.ellipse));
-                break;
-            }
-        }
+        let found = lost_and_found(cfg, seed, start, &seen, &both);
         let (i, e) = found.unwrap_or_else(|| panic!("seed {seed}: not found again"));
         assert!((e.cx - 48.0).abs() < 4.0 && (e.cy - 120.0).abs() < 4.0, "seed {seed}, frame {i}: {e:?}");
     }
@@ -696,36 +700,13 @@ fn a_target_lost_at_the_frame_s_edge_is_looked_for_everywhere() {
     // was lost ((4 + 0.05 · 40) · 8 = 48 px). Found at the edge, it is
     // looked for over the whole frame: with the re-detection's spots there
     // (`Redetect::Frame`), every seed finds it again on the target.
-    const WW: usize = 320;
-    let scene = |x0: Option<usize>| {
-        let mut px = vec![100u8; WW * 240 * 3];
-        let colours = [[220, 30, 30], [30, 200, 30], [30, 30, 220], [220, 220, 30]];
-        if let Some(x0) = x0 {
-            for y in 112..128 {
-                for x in x0..x0 + 16 {
-                    let q = (x >= x0 + 8) as usize + 2 * (y >= 120) as usize;
-                    px[(y * WW + x) * 3..][..3].copy_from_slice(&colours[q]);
-                }
-            }
-        }
-        px
-    };
-    fn f(p: &[u8]) -> Frame<'_> {
-        Frame::packed(p, 320, 240, PixelFormat::Rgb888).unwrap()
-    }
-    let (right, none, left) = (scene(Some(300)), scene(None), scene(Some(4)));
+    let (right, left) = (wide_scene(&[300]), wide_scene(&[4]));
     let cfg =
         Config { lost_search: LostSearch::Widening { growth: 0.05 }, redetect: Redetect::Frame, ..Config::default() };
+    let start = BoundingBox::new(300.0, 112.0, 16.0, 16.0);
     for seed in 1..=8 {
-        let mut t: Tracker<100> = Tracker::new(cfg, seed).unwrap();
-        t.init(&f(&right), BoundingBox::new(300.0, 112.0, 16.0, 16.0)).unwrap();
-        for _ in 0..5 {
-            assert_eq!(t.step(&f(&right)).unwrap().state, TrackState::Tracking, "seed {seed}");
-        }
-        let lost = (0..20).map(|_| t.step(&f(&none)).unwrap().state).filter(|s| *s == TrackState::Lost).count();
-        assert!(lost >= 10, "seed {seed}: lost on {lost} of 20 frames");
-        let found = (0..20).map(|_| t.step(&f(&left)).unwrap()).find(|e| e.state == TrackState::Tracking);
-        let e = found.unwrap_or_else(|| panic!("seed {seed}: not found again")).ellipse;
+        let found = lost_and_found(cfg, seed, start, &right, &left);
+        let e = found.unwrap_or_else(|| panic!("seed {seed}: not found again")).1;
         // On the target: its centre within a half axis of the truth's.
         assert!((e.cx - 12.0).abs() < 8.0 && (e.cy - 120.0).abs() < 8.0, "seed {seed}: {e:?}");
     }
