@@ -129,7 +129,7 @@ pub const KEYS: &[Key] = &[
     ),
     key(
         "gradient",
-        "off | on | RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND (correlation filter on gradient channels over a wide window; on = 0.2:0.7:4:0.7:0.03:0.3:3:0)",
+        "off | on | RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND:RELEARN_BELOW:RELEARN_ABOVE (correlation filter on gradient channels over a wide window; on = 0.2:0.7:4:0.7:0.03:0.3:3:0:4:0.8)",
         gradient,
     ),
     key(
@@ -374,21 +374,25 @@ fn gradient(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
     c.gradient = match v.split(':').collect::<Vec<_>>().as_slice() {
         ["off"] => None,
         ["on"] => Some(pftrack::GradientCue::MEASURED),
-        [rate, above, every, pull, step, scale_pull, psr, blend] => Some(pftrack::GradientCue {
-            rate: num(key, rate)?,
-            learn_above: num(key, above)?,
-            learn_every: every
-                .parse()
-                .map_err(|_| format!("{key}: `{every}`: LEARN_EVERY is a count from 1 to 255"))?,
-            pull: num(key, pull)?,
-            scale_step: num(key, step)?,
-            scale_pull: num(key, scale_pull)?,
-            min_psr: num(key, psr)?,
-            blend: num(key, blend)?,
-        }),
+        [rate, above, every, pull, step, scale_pull, psr, blend, relearn_below, relearn_above] => {
+            Some(pftrack::GradientCue {
+                rate: num(key, rate)?,
+                learn_above: num(key, above)?,
+                learn_every: every
+                    .parse()
+                    .map_err(|_| format!("{key}: `{every}`: LEARN_EVERY is a count from 1 to 255"))?,
+                pull: num(key, pull)?,
+                scale_step: num(key, step)?,
+                scale_pull: num(key, scale_pull)?,
+                min_psr: num(key, psr)?,
+                blend: num(key, blend)?,
+                relearn_below: num(key, relearn_below)?,
+                relearn_above: num(key, relearn_above)?,
+            })
+        }
         _ => {
             return Err(format!(
-                "{key}: `{v}`: expected off, on or RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND"
+                "{key}: `{v}`: expected off, on or RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND:RELEARN_BELOW:RELEARN_ABOVE"
             ));
         }
     };

@@ -203,6 +203,9 @@ pub(crate) struct GradientFilter {
     learned: bool,
     /// Confident frames seen since the last one learnt.
     waiting: u16,
+    /// Whether this frame's response, as `place` read it, fell under
+    /// [`GradientCue::relearn_below`] (until `adapt` has seen it).
+    unlike: bool,
     /// Where `cells` holds this frame's read window: its centre and cell
     /// size (cleared once the frame is adapted to).
     window: Option<((Real, Real), (Real, Real))>,
@@ -298,6 +301,7 @@ impl GradientFilter {
             scales: [0.0; CHANNELS],
             learned: false,
             waiting: 0,
+            unlike: false,
             window: None,
             cells: [0; CHANNELS * READ * READ],
         }
@@ -786,6 +790,7 @@ impl Cue for GradientFilter {
         // starts (not the particles' mean, which the blend reads: the
         // estimate is measured the better centre, docs/accuracy.md).
         let seen = self.look(frame, (ellipse.cx, ellipse.cy), (ellipse.hx, ellipse.hy))?;
+        self.unlike = seen.psr < c.relearn_below;
         if seen.psr >= c.min_psr {
             let (x, y) = (seen.centre.0 + seen.at.0, seen.centre.1 + seen.at.1);
             let (dx, dy) = (c.pull * (x - ellipse.cx), c.pull * (y - ellipse.cy));
@@ -809,14 +814,18 @@ impl Cue for GradientFilter {
     }
 
     /// Learns on every `learn_every`-th confident frame at its own rate:
-    /// as a running mean over many frames it does not drift with one.
+    /// as a running mean over many frames it does not drift with one. A
+    /// sure frame whose layout no longer matches is learnt at once
+    /// ([`GradientCue::relearn_below`]).
     fn adapt(&mut self, c: &GradientCue, frame: &Frame<'_>, e: &Ellipse, confidence: Real) {
         if confidence > c.learn_above {
             self.waiting = self.waiting.saturating_add(1);
-            if !self.learned || self.waiting >= c.learn_every as u16 {
+            let turned = self.unlike && confidence > c.relearn_above;
+            if !self.learned || self.waiting >= c.learn_every as u16 || turned {
                 self.learn(frame, e, c.rate);
             }
         }
+        self.unlike = false;
         self.window = None;
     }
 }
@@ -956,6 +965,49 @@ mod tests {
         let far = Ellipse { cx: 180.0, ..e };
         assert_eq!(within(((160.0, 120.0), (2.5, 2.5)), &far, (2.5, 2.5)), None);
         assert_eq!(within(((160.0, 120.0), (2.5, 2.5)), &e, (2.6, 2.5)), None);
+    }
+
+    /// `px` turned a quarter turn about the target's centre (grey 128
+    /// where the turn brings in nothing).
+    fn quarter_turn(px: &[u8]) -> Vec<u8> {
+        let (cx, cy) = (160, 120);
+        let mut out = vec![128u8; W * H];
+        for y in 0..H as i32 {
+            for x in 0..W as i32 {
+                let (u, v) = (cx - (y - cy), cy + (x - cx));
+                if (0..W as i32).contains(&u) && (0..H as i32).contains(&v) {
+                    out[(y * W as i32 + x) as usize] = px[(v * W as i32 + u) as usize];
+                }
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn a_sure_frame_whose_layout_no_longer_matches_is_learnt_at_once() {
+        // Reason: the rule's cases by construction. The filter learns a
+        // texture, then waits its turn (`learn_every`) to learn again. The
+        // same texture answers with a clear peak (PSR over 5, the test
+        // above); turned a quarter turn about the target it is a layout the
+        // filter never saw (PSR under `relearn_below`, 4). A frame of the
+        // turned texture must teach the filter at once when its confidence
+        // exceeds `relearn_above` (0.8), and wait its turn when it does
+        // not; the texture as learnt must wait its turn however sure.
+        let first = blocks(0, 0);
+        let turned = quarter_turn(&first);
+        let c = GradientCue::MEASURED;
+        for (px, confidence, learns) in [(&first, 0.95, false), (&turned, 0.75, false), (&turned, 0.95, true)] {
+            let mut f = GradientFilter::new();
+            let mut e = target();
+            f.learn(&frame(&first), &e, c.rate);
+            let mut ps = [Particle::default(); 4];
+            let psr = f.place(&c, &frame(px), (&mut e, &mut ps), false).unwrap();
+            assert_eq!(psr < c.relearn_below, learns || confidence < c.relearn_above, "PSR {psr}");
+            let before = f.weights;
+            f.adapt(&c, &frame(px), &e, confidence);
+            assert_eq!(f.weights != before, learns, "confidence {confidence}, PSR {psr}");
+            assert_eq!(f.waiting, if learns { 0 } else { 1 });
+        }
     }
 
     #[test]

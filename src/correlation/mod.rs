@@ -170,7 +170,9 @@ pub(crate) fn validate_gradient(settings: Option<GradientCue>) -> Result<(), Con
     check("gradient.scale_step", c.scale_step, 0.0, 0.2)?;
     check("gradient.scale_pull", c.scale_pull, 0.0, 1.0)?;
     check("gradient.min_psr", c.min_psr, 0.0, 20.0)?;
-    check("gradient.blend", c.blend, 0.0, 1.0)
+    check("gradient.blend", c.blend, 0.0, 1.0)?;
+    check("gradient.relearn_below", c.relearn_below, 0.0, 20.0)?;
+    check("gradient.relearn_above", c.relearn_above, 0.0, 1.0)
 }
 
 /// A correlation filter on gradient channels over a wide window (the
@@ -230,6 +232,17 @@ pub struct GradientCue {
     pub min_psr: Real,
     /// The response's share of each particle's similarity, in `[0, 1]`.
     pub blend: Real,
+    /// A frame more confident than `relearn_above` whose response's
+    /// peak-to-sidelobe ratio falls under this, in `[0, 20]` (0: never),
+    /// teaches the filter at once rather than at its turn: the colours say
+    /// the target is held while its layout no longer matches the filter's
+    /// (it turns or changes shape), and a filter left to its turn pulls
+    /// the estimate towards wherever the old layout fits best.
+    pub relearn_below: Real,
+    /// The confidence, in `[0, 1]`, a frame must exceed for a low
+    /// peak-to-sidelobe ratio to teach the filter at once
+    /// ([`GradientCue::relearn_below`]).
+    pub relearn_above: Real,
 }
 
 impl GradientCue {
@@ -237,8 +250,11 @@ impl GradientCue {
     /// learnt at 0.2 on every fourth frame whose confidence exceeds 0.7
     /// (a running mean as slow as 0.05 on every frame), a move 0.7 of the
     /// way to the peak and a size 0.3 of the way to the best of three
-    /// scales 3% apart when the PSR reaches 3, and no share of the
-    /// particles' similarities (a 0.3 share loses 0.04 on the check split).
+    /// scales 3% apart when the PSR reaches 3, no share of the particles'
+    /// similarities (a 0.3 share loses 0.04 on the check split), and a
+    /// frame more confident than 0.8 (the life cycle's default
+    /// `found_above`) whose PSR is under 4 learnt at once (a turning target
+    /// followed; the real sequences unchanged within their seeds' noise).
     pub const MEASURED: GradientCue = GradientCue {
         rate: 0.2,
         learn_above: 0.7,
@@ -248,5 +264,7 @@ impl GradientCue {
         scale_pull: 0.3,
         min_psr: 3.0,
         blend: 0.0,
+        relearn_below: 4.0,
+        relearn_above: 0.8,
     };
 }

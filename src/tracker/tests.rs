@@ -538,6 +538,8 @@ fn the_gradient_filter_needs_its_feature_and_sane_settings() {
         (GradientCue { scale_pull: -0.1, ..m }, "gradient.scale_pull", ParamProblem::OutOfRange),
         (GradientCue { min_psr: 21.0, ..m }, "gradient.min_psr", ParamProblem::OutOfRange),
         (GradientCue { blend: Real::NAN, ..m }, "gradient.blend", ParamProblem::NonFinite),
+        (GradientCue { relearn_below: -1.0, ..m }, "gradient.relearn_below", ParamProblem::OutOfRange),
+        (GradientCue { relearn_above: Real::NAN, ..m }, "gradient.relearn_above", ParamProblem::NonFinite),
     ] {
         let err = Tracker::<10>::new(Config { gradient: Some(cue), ..Config::default() }, 1).unwrap_err();
         assert_eq!(err, Error::Config(ConfigError { field, problem }));
