@@ -23,8 +23,10 @@ pub(crate) trait Cue {
 
     /// Learns the target afresh from its first box `e` (initialisation,
     /// search, re-initialisation), forgetting any earlier target; `settings`
-    /// is `None` when the cue is off.
-    fn start(&mut self, settings: Option<&Self::Settings>, frame: &Frame<'_>, e: &Ellipse);
+    /// is `None` when the cue is off. `work` is working memory the tracker
+    /// lends for the call (see [`crate::foreground::ForegroundMap::lend`]):
+    /// a learning's large temporaries go there rather than on the stack.
+    fn start(&mut self, settings: Option<&Self::Settings>, frame: &Frame<'_>, e: &Ellipse, work: &mut [u16]);
 
     /// Mixes the cue's own score of each of the first `n` particles into
     /// its similarity in `similarities` (before the similarities are
@@ -34,10 +36,10 @@ pub(crate) trait Cue {
         &mut self,
         settings: &Self::Settings,
         frame: &Frame<'_>,
-        particles: &[Particle; N],
-        similarities: &mut [Real; N],
+        (particles, similarities): (&[Particle; N], &mut [Real; N]),
         n: usize,
         half_axes: (Real, Real),
+        work: &mut [u16],
     ) {
     }
 
@@ -52,6 +54,7 @@ pub(crate) trait Cue {
         frame: &Frame<'_>,
         estimate: (&mut Ellipse, &mut [Particle; N]),
         search: bool,
+        work: &mut [u16],
     ) -> Option<Real> {
         None
     }
@@ -64,9 +67,11 @@ pub(crate) trait Cue {
         false
     }
 
-    /// Adapts to this frame's estimate `e`, whose confidence is `confidence`.
+    /// Adapts to this frame's estimate `e`, whose confidence is `confidence`
+    /// (`work` as for [`Cue::start`]).
     #[allow(unused_variables)]
-    fn adapt(&mut self, settings: &Self::Settings, frame: &Frame<'_>, e: &Ellipse, confidence: Real) {}
+    fn adapt(&mut self, settings: &Self::Settings, frame: &Frame<'_>, e: &Ellipse, confidence: Real, work: &mut [u16]) {
+    }
 }
 
 /// A cue this build leaves out: it takes no memory and does nothing (its
@@ -87,7 +92,7 @@ impl<S> Absent<S> {
 impl<S: Copy> Cue for Absent<S> {
     type Settings = S;
 
-    fn start(&mut self, _: Option<&S>, _: &Frame<'_>, _: &Ellipse) {}
+    fn start(&mut self, _: Option<&S>, _: &Frame<'_>, _: &Ellipse, _: &mut [u16]) {}
 }
 
 /// The error for settings that ask for a cue this build leaves out.

@@ -188,6 +188,11 @@ fn lattice_step(area: u32, budget: u32) -> i32 {
     step as i32
 }
 
+/// A value on a 4-byte boundary.
+#[derive(Clone, Debug)]
+#[repr(C, align(4))]
+struct Aligned<T>(T);
+
 /// `P(target | colour)` over a rectangle of one frame, on a lattice, with
 /// running sums: the sum over any box is four reads. Holds at most `F`
 /// running sums, i.e. `(columns + 1) · (rows + 1) <= F`; larger rectangles
@@ -195,8 +200,9 @@ fn lattice_step(area: u32, budget: u32) -> i32 {
 #[derive(Clone, Debug)]
 pub struct ForegroundMap<const F: usize> {
     /// `sums[j · (cols + 1) + i]`: the sum of the cells left of column `i`
-    /// and above row `j`.
-    sums: [u16; F],
+    /// and above row `j` (4-byte aligned: lent as working memory, see
+    /// [`ForegroundMap::lend`]).
+    sums: Aligned<[u16; F]>,
     /// Pixel of cell (0, 0).
     x0: i32,
     /// See `x0`.
@@ -219,7 +225,7 @@ impl<const F: usize> ForegroundMap<F> {
         const {
             assert!(F <= 4097, "running sums of 4-bit cells fit a u16 up to 4096 cells");
         }
-        ForegroundMap { sums: [0; F], x0: 0, y0: 0, step: 1, cols: 0, rows: 0 }
+        ForegroundMap { sums: Aligned([0; F]), x0: 0, y0: 0, step: 1, cols: 0, rows: 0 }
     }
 
     /// Fills the map over the pixel rectangle `[x0, x1) × [y0, y1)` (clipped
@@ -251,17 +257,17 @@ impl<const F: usize> ForegroundMap<F> {
         }
         (self.cols, self.rows) = (cols, rows);
         let stride = (cols + 1) as usize;
-        for s in self.sums.iter_mut().take(stride) {
+        for s in self.sums.0.iter_mut().take(stride) {
             *s = 0;
         }
         let odds = &fg.odds;
         for j in 0..rows {
             let base = (j as usize + 1) * stride;
-            if let Some(s) = self.sums.get_mut(base) {
+            if let Some(s) = self.sums.0.get_mut(base) {
                 *s = 0;
             }
             // Row j's running sums: the row above's plus this row's so far.
-            let Some((above, here)) = self.sums.split_at_mut_checked(base) else { break };
+            let Some((above, here)) = self.sums.0.split_at_mut_checked(base) else { break };
             let above = above.get(base - stride + 1..).unwrap_or(&[]);
             let here = here.get_mut(1..).unwrap_or(&mut []);
             let mut run = 0u16;
@@ -291,6 +297,14 @@ impl<const F: usize> ForegroundMap<F> {
         self.compute(frame, rect, layout, fg);
     }
 
+    /// The map's running sums as working memory, 4-byte aligned, for the
+    /// end of a step: the map is built afresh wherever it is read, so its
+    /// sums are dead once the step has estimated. The map is left empty.
+    pub(crate) fn lend(&mut self) -> &mut [u16] {
+        (self.cols, self.rows) = (0, 0);
+        &mut self.sums.0
+    }
+
     /// Pixels between the map's cells.
     pub(crate) fn step(&self) -> i32 {
         self.step
@@ -314,7 +328,7 @@ impl<const F: usize> ForegroundMap<F> {
             return (0, 0);
         }
         let stride = (self.cols + 1) as usize;
-        let at = |i: i32, j: i32| self.sums.get(j as usize * stride + i as usize).copied().unwrap_or(0);
+        let at = |i: i32, j: i32| self.sums.0.get(j as usize * stride + i as usize).copied().unwrap_or(0);
         let total = at(i1, j1).wrapping_sub(at(i0, j1)).wrapping_sub(at(i1, j0)).wrapping_add(at(i0, j0));
         (total as u32, ((i1 - i0) * (j1 - j0)) as u32)
     }

@@ -294,6 +294,21 @@ fn slot(r: usize, c: usize) -> Slot {
 /// while the filter reads a window: the tracker need not keep it).
 const EMPTY: Spectrum = [[Complex32::new(0.0, 0.0); COLS]; GRID];
 
+/// 4-byte words a spectrum takes.
+pub(crate) const SPECTRUM_WORDS: usize = 2 * GRID * COLS;
+
+/// An empty spectrum laid out in `work`, if it is 4-byte aligned and holds
+/// [`SPECTRUM_WORDS`] words (the tracker lends its foreground map's sums,
+/// which do: `tracker::scratch` checks the size when built). In lent memory
+/// rather than on the stack: the filter's three uses of a spectrum
+/// (learning, the response, a scale's peak) each took 1.2 KB of it.
+fn spectrum(work: &mut [u16]) -> Option<&mut Spectrum> {
+    let rows: &mut [[Complex32; COLS]] = bytemuck::try_cast_slice_mut(work.get_mut(..2 * SPECTRUM_WORDS)?).ok()?;
+    let spectrum: &mut Spectrum = rows.try_into().ok()?;
+    *spectrum = EMPTY;
+    Some(spectrum)
+}
+
 impl CorrelationFilter {
     /// An empty filter (it answers nothing until it has learnt a window).
     pub(crate) const fn new() -> Self {
@@ -311,9 +326,11 @@ impl CorrelationFilter {
 
     /// Learns the window around `e` at `rate` (the first window is learnt
     /// whole, whatever the rate).
-    pub(crate) fn learn(&mut self, frame: &Frame<'_>, e: &Ellipse, padding: Real, rate: Real) {
-        let mut work = EMPTY;
-        if !transform(&mut work, frame, e, padding) {
+    /// Its spectrum lies in `work` (lent memory, see [`Cue::start`]):
+    /// nothing is learnt in less than [`SPECTRUM_WORDS`] aligned words.
+    pub(crate) fn learn(&mut self, frame: &Frame<'_>, e: &Ellipse, (padding, rate): (Real, Real), work: &mut [u16]) {
+        let Some(work) = spectrum(work) else { return };
+        if !transform(work, frame, e, padding) {
             return;
         }
         let eta = if self.learned { rate } else { 1.0 };
@@ -361,15 +378,23 @@ impl CorrelationFilter {
     /// sin²(π d / GRID)` along each axis, `d` its shift in lattice points
     /// (see [`CorrelationCue::centre_bias`]); its value, sub-cell fit and
     /// PSR are the response's own.
+    /// Its spectrum lies in `work`, as [`learn`](Self::learn)'s does
+    /// (`None` in less).
     #[inline(never)]
-    pub(crate) fn respond(&self, frame: &Frame<'_>, e: &Ellipse, padding: Real, centre_bias: Real) -> Option<Response> {
-        let mut work = EMPTY;
-        if !self.product(&mut work, frame, e, padding) {
+    pub(crate) fn respond(
+        &self,
+        frame: &Frame<'_>,
+        e: &Ellipse,
+        (padding, centre_bias): (Real, Real),
+        work: &mut [u16],
+    ) -> Option<Response> {
+        let work = spectrum(work)?;
+        if !self.product(work, frame, e, padding) {
             return None;
         }
         // Inverse along the columns: each row then holds the half spectrum
         // of one row of the (real) response.
-        transform_columns(&mut work, microfft::inverse::ifft_16);
+        transform_columns(work, microfft::inverse::ifft_16);
         // Then along the rows, two at a time: rows a and b of a real
         // response have Hermitian spectra, so one inverse FFT of
         // `X_a + i X_b` (each mirrored from its half) returns row a in the
@@ -411,7 +436,7 @@ impl CorrelationFilter {
         }
         // The peak and its four neighbours (wrapped), for a sub-cell peak.
         let (r, c) = at;
-        let work = &work;
+        let work = &*work;
         let value = |r: usize, c: usize| {
             let (r, c) = (r % GRID, c % GRID);
             work.get(r).and_then(|row| row.get(c / 2)).map_or(0.0, |v| if c % 2 == 0 { v.re } else { v.im })
@@ -438,12 +463,18 @@ impl CorrelationFilter {
     // each would keep its own spectrum in one frame (and its own copy of
     // the transform in the code).
     #[inline(never)]
-    pub(crate) fn peak_near(&self, frame: &Frame<'_>, e: &Ellipse, padding: Real, at: (Real, Real)) -> Option<Real> {
-        let mut work = EMPTY;
-        if !self.product(&mut work, frame, e, padding) {
+    pub(crate) fn peak_near(
+        &self,
+        frame: &Frame<'_>,
+        e: &Ellipse,
+        (padding, at): (Real, (Real, Real)),
+        work: &mut [u16],
+    ) -> Option<Real> {
+        let work = spectrum(work)?;
+        if !self.product(work, frame, e, padding) {
             return None;
         }
-        transform_columns(&mut work, microfft::inverse::ifft_16);
+        transform_columns(work, microfft::inverse::ifft_16);
         let (sx, sy) = cell(e, padding);
         let (r, c) = (lattice_point(at.1 / sy), lattice_point(at.0 / sx));
         let mut best = Real::MIN;
@@ -695,10 +726,10 @@ pub(super) fn sub_cell(left: Real, peak: Real, right: Real) -> Real {
 impl Cue for CorrelationFilter {
     type Settings = CorrelationCue;
 
-    fn start(&mut self, settings: Option<&CorrelationCue>, frame: &Frame<'_>, e: &Ellipse) {
+    fn start(&mut self, settings: Option<&CorrelationCue>, frame: &Frame<'_>, e: &Ellipse, work: &mut [u16]) {
         self.reset();
         if let Some(c) = settings {
-            self.learn(frame, e, c.padding, c.rate);
+            self.learn(frame, e, (c.padding, c.rate), work);
         }
     }
 
@@ -711,8 +742,9 @@ impl Cue for CorrelationFilter {
         frame: &Frame<'_>,
         (ellipse, particles): (&mut Ellipse, &mut [Particle; N]),
         search: bool,
+        work: &mut [u16],
     ) -> Option<Real> {
-        let response = self.respond(frame, ellipse, c.padding, c.centre_bias)?;
+        let response = self.respond(frame, ellipse, (c.padding, c.centre_bias), work)?;
         // A response with no clear peak says nothing of where the target
         // went, nor of its size.
         let sure = response.psr >= c.min_psr;
@@ -732,7 +764,7 @@ impl Cue for CorrelationFilter {
             let mut best = (response.peak, 1.0);
             for s in [1.0 + c.scale_step, 1.0 / (1.0 + c.scale_step)] {
                 let scaled = Ellipse { hx: ellipse.hx * s, hy: ellipse.hy * s, ..*ellipse };
-                if let Some(r) = self.peak_near(frame, &scaled, c.padding, left)
+                if let Some(r) = self.peak_near(frame, &scaled, (c.padding, left), work)
                     && r > best.0
                 {
                     best = (r, s);
@@ -746,9 +778,9 @@ impl Cue for CorrelationFilter {
 
     /// Learns on every confident frame, at its own slow rate: as a running
     /// mean over many frames it does not drift with one.
-    fn adapt(&mut self, c: &CorrelationCue, frame: &Frame<'_>, e: &Ellipse, confidence: Real) {
+    fn adapt(&mut self, c: &CorrelationCue, frame: &Frame<'_>, e: &Ellipse, confidence: Real, work: &mut [u16]) {
         if confidence > c.learn_above {
-            self.learn(frame, e, c.padding, c.rate);
+            self.learn(frame, e, (c.padding, c.rate), work);
         }
     }
 }
@@ -760,6 +792,15 @@ mod tests {
 
     const W: usize = 160;
     const H: usize = 120;
+
+    /// Working memory as the tracker lends it: 4-byte aligned, and as
+    /// large as a spectrum.
+    #[repr(C, align(4))]
+    struct Work([u16; 2 * SPECTRUM_WORDS]);
+
+    fn work() -> Box<Work> {
+        Box::new(Work([0; 2 * SPECTRUM_WORDS]))
+    }
 
     /// A smooth grey texture (sums of slanted waves, no period within a
     /// window), its content moved by `(dx, dy)` pixels.
@@ -898,10 +939,11 @@ mod tests {
         // And the learnt entries fill the packed arrays one to one.
         let px = texture(0.0, 0.0, WAVES);
         let (f, e) = (frame(&px), target());
-        let mut work = EMPTY;
-        assert!(transform(&mut work, &f, &e, 2.0));
+        let mut window = EMPTY;
+        assert!(transform(&mut window, &f, &e, 2.0));
         let mut filter = CorrelationFilter::new();
-        filter.learn(&f, &e, 2.0, 0.05);
+        filter.learn(&f, &e, (2.0, 0.05), &mut work().0);
+        let work = window;
         let largest = work.iter().flatten().map(|v| v.norm_sqr()).fold(0.0, Real::max);
         for (r, row) in work.iter().enumerate() {
             for (c, v) in row.iter().enumerate() {
@@ -935,11 +977,11 @@ mod tests {
         // cell after the sub-cell fit.
         let first = texture(0.0, 0.0, WAVES);
         let mut filter = CorrelationFilter::new();
-        assert_eq!(filter.respond(&frame(&first), &target(), 2.0, 0.0), None, "nothing learnt yet");
-        filter.learn(&frame(&first), &target(), 2.0, 0.05);
+        assert_eq!(filter.respond(&frame(&first), &target(), (2.0, 0.0), &mut work().0), None, "nothing learnt yet");
+        filter.learn(&frame(&first), &target(), (2.0, 0.05), &mut work().0);
         for (dx, dy) in [(3.0, -2.0), (-5.0, 4.0), (0.0, 0.0)] {
             let moved = texture(dx, dy, WAVES);
-            let r = filter.respond(&frame(&moved), &target(), 2.0, 0.0).unwrap();
+            let r = filter.respond(&frame(&moved), &target(), (2.0, 0.0), &mut work().0).unwrap();
             assert!(
                 (r.shift.0 as f64 - dx).abs() < 1.0 && (r.shift.1 as f64 - dy).abs() < 0.75,
                 "moved by ({dx}, {dy}), found {:?}",
@@ -949,7 +991,7 @@ mod tests {
             // response is flatter than the moved texture's (measured: a
             // PSR of about 3 against 6 to 7).
             let other = texture(0.0, 0.0, OTHER);
-            let o = filter.respond(&frame(&other), &target(), 2.0, 0.0).unwrap();
+            let o = filter.respond(&frame(&other), &target(), (2.0, 0.0), &mut work().0).unwrap();
             assert!(o.psr < 0.6 * r.psr, "PSR {} on an unseen texture against {} on the target", o.psr, r.psr);
         }
     }
@@ -966,15 +1008,15 @@ mod tests {
         // bounds every value of it).
         let first = texture(0.0, 0.0, WAVES);
         let mut filter = CorrelationFilter::new();
-        filter.learn(&frame(&first), &target(), 2.0, 0.05);
+        filter.learn(&frame(&first), &target(), (2.0, 0.05), &mut work().0);
         let (cx, cy) = (4.0, 3.0); // the window's cells: 64 x 48 px over 16
         for (dx, dy) in [(3.0, -2.0), (-5.0, 4.0), (0.0, 0.0), (8.0, 6.0)] {
             let moved = texture(dx, dy, WAVES);
-            let r = filter.respond(&frame(&moved), &target(), 2.0, 0.0).unwrap();
-            let near = filter.peak_near(&frame(&moved), &target(), 2.0, r.shift).unwrap();
+            let r = filter.respond(&frame(&moved), &target(), (2.0, 0.0), &mut work().0).unwrap();
+            let near = filter.peak_near(&frame(&moved), &target(), (2.0, r.shift), &mut work().0).unwrap();
             assert!((near - r.peak).abs() <= 1e-5 * r.peak.abs(), "moved by ({dx}, {dy}): {near} against {}", r.peak);
             let away = (r.shift.0 + 5.0 * cx, r.shift.1 + 5.0 * cy);
-            let far = filter.peak_near(&frame(&moved), &target(), 2.0, away).unwrap();
+            let far = filter.peak_near(&frame(&moved), &target(), (2.0, away), &mut work().0).unwrap();
             assert!(far < 0.9 * r.peak, "moved by ({dx}, {dy}): {far} five cells away against {}", r.peak);
         }
     }
@@ -998,7 +1040,7 @@ mod tests {
         // against that lean (docs/accuracy.md).
         let first = blocks(1.0);
         let mut filter = CorrelationFilter::new();
-        filter.learn(&frame(&first), &target(), 2.0, 0.05);
+        filter.learn(&frame(&first), &target(), (2.0, 0.05), &mut work().0);
         let e = target();
         for (zoom, winner) in [(1.08, 0), (1.0 / 1.08, 2)] {
             let px = blocks(zoom);
@@ -1006,7 +1048,7 @@ mod tests {
                 .iter()
                 .map(|&s| {
                     let scaled = Ellipse { hx: e.hx * s, hy: e.hy * s, ..e };
-                    filter.respond(&frame(&px), &scaled, 2.0, 0.0).unwrap().peak
+                    filter.respond(&frame(&px), &scaled, (2.0, 0.0), &mut work().0).unwrap().peak
                 })
                 .collect();
             let best = (0..3).max_by(|&a, &b| peaks[a].total_cmp(&peaks[b])).unwrap();
@@ -1027,7 +1069,7 @@ mod tests {
         // 6 lattice points), so the weighed answer must be another point.
         let first = texture(0.0, 0.0, WAVES);
         let mut filter = CorrelationFilter::new();
-        filter.learn(&frame(&first), &target(), 2.0, 0.05);
+        filter.learn(&frame(&first), &target(), (2.0, 0.05), &mut work().0);
         let other = texture(0.0, 0.0, OTHER);
         let (sx, sy) = cell(&target(), 2.0);
         let point = |r: &Response| (round(r.shift.0 / sx), round(r.shift.1 / sy));
@@ -1035,10 +1077,10 @@ mod tests {
             let w = |d: i32| 1.0 - bias * (std::f64::consts::PI * d as f64 / GRID as f64).sin().powi(2);
             w(c) * w(r)
         };
-        let far = filter.respond(&frame(&other), &target(), 2.0, 0.0).unwrap();
+        let far = filter.respond(&frame(&other), &target(), (2.0, 0.0), &mut work().0).unwrap();
         let (fc, fr) = point(&far);
         assert!(fc.abs().max(fr.abs()) >= 4, "the unseen texture's highest value at {:?}", (fc, fr));
-        let near = filter.respond(&frame(&other), &target(), 2.0, 0.7).unwrap();
+        let near = filter.respond(&frame(&other), &target(), (2.0, 0.7), &mut work().0).unwrap();
         let (nc, nr) = point(&near);
         assert!(near.peak <= far.peak, "{} above the highest value {}", near.peak, far.peak);
         assert!(keep(0.7, (nc, nr)) > keep(0.7, (fc, fr)), "{:?} no nearer than {:?}", (nc, nr), (fc, fr));
@@ -1053,7 +1095,7 @@ mod tests {
         // A clear match is still found where it lies, even weighed fully
         // (ground truth: the learnt texture moved by whole pixels).
         for (dx, dy) in [(3.0, -2.0), (-5.0, 4.0)] {
-            let r = filter.respond(&frame(&texture(dx, dy, WAVES)), &target(), 2.0, 1.0).unwrap();
+            let r = filter.respond(&frame(&texture(dx, dy, WAVES)), &target(), (2.0, 1.0), &mut work().0).unwrap();
             assert!(
                 (r.shift.0 as f64 - dx).abs() < 1.0 && (r.shift.1 as f64 - dy).abs() < 0.75,
                 "moved by ({dx}, {dy}), found {:?}",
@@ -1068,14 +1110,14 @@ mod tests {
         // neither learns from it nor answers on it.
         let flat = vec![77u8; W * H];
         let mut filter = CorrelationFilter::new();
-        filter.learn(&frame(&flat), &target(), 2.0, 0.05);
+        filter.learn(&frame(&flat), &target(), (2.0, 0.05), &mut work().0);
         assert!(!filter.learned);
         let px = texture(0.0, 0.0, WAVES);
-        filter.learn(&frame(&px), &target(), 2.0, 0.05);
-        assert_eq!(filter.respond(&frame(&flat), &target(), 2.0, 0.0), None);
+        filter.learn(&frame(&px), &target(), (2.0, 0.05), &mut work().0);
+        assert_eq!(filter.respond(&frame(&flat), &target(), (2.0, 0.0), &mut work().0), None);
         // A window partly outside the frame repeats the frame's edge
         // rather than reading out of it.
         let corner = Ellipse { cx: 2.0, cy: 3.0, hx: 20.0, hy: 20.0 };
-        assert!(filter.respond(&frame(&px), &corner, 4.0, 0.0).is_some());
+        assert!(filter.respond(&frame(&px), &corner, (4.0, 0.0), &mut work().0).is_some());
     }
 }

@@ -352,13 +352,13 @@ impl GradientFilter {
     /// [`Self::at_shift`] weights the shift it stands for. The best pooled
     /// shift (in pooled cells from the centre) and the peak-to-sidelobe
     /// ratio over all of them.
-    fn coarse(&self, reading: &Reading) -> Option<((i32, i32), Real)> {
+    fn coarse(&self, reading: &Reading, work: &mut [u16]) -> Option<((i32, i32), Real)> {
         // Pooled cell `p` holds the window's cells `2p` and `2p + 1`; the
         // filter is padded with a row and a column of zeros before its
         // first, so that at an even shift its padded top-left cell starts
         // a pooled cell.
         const ORIGIN: usize = (READ / 2 - HALF - 1) / 2;
-        let mut cells = [0u8; CHANNELS * POOLED * POOLED];
+        let (weights, cells) = pooled_room(work)?;
         for (k, pooled) in cells.chunks_exact_mut(POOLED * POOLED).enumerate() {
             let plane = self.cells.get(k * READ * READ..(k + 1) * READ * READ)?;
             for (r, out) in pooled.chunks_exact_mut(POOLED).enumerate() {
@@ -370,8 +370,10 @@ impl GradientFilter {
                 }
             }
         }
-        let mut weights = [[[0i32; POOLED_SUPPORT]; POOLED_SUPPORT]; CHANNELS];
         for (pooled, full) in weights.iter_mut().zip(self.weights.iter()) {
+            for row in pooled.iter_mut() {
+                row.fill(0);
+            }
             // Row and column `r` of the filter are `r + 1` of the padded
             // one, in pooled cell `(r + 1) / 2`.
             for (r, row) in full.iter().enumerate() {
@@ -392,7 +394,7 @@ impl GradientFilter {
                 let corner = ((ORIGIN as i32 + tr) as usize, (ORIGIN as i32 + tc) as usize);
                 // At most 49 · 4 · 32,767 · 255 in magnitude a channel:
                 // within an i32.
-                let v = products(&weights, (&cells, POOLED), reading, corner, pooled_dot)? * weight(tr) * weight(tc);
+                let v = products(weights, (cells, POOLED), reading, corner, pooled_dot)? * weight(tr) * weight(tc);
                 (s1, s2, count) = (s1 + v, s2 + v * v, count + 1);
                 if v > best {
                     (best, at) = (v, (tr, tc));
@@ -407,7 +409,13 @@ impl GradientFilter {
     /// Reads the window around `centre` for a box of half axes `half_axes`
     /// and finds its response's peak; `None` before anything is learnt, or
     /// for a window of one grey level.
-    fn look(&mut self, frame: &Frame<'_>, centre: (Real, Real), half_axes: (Real, Real)) -> Option<Seen> {
+    fn look(
+        &mut self,
+        frame: &Frame<'_>,
+        centre: (Real, Real),
+        half_axes: (Real, Real),
+        work: &mut [u16],
+    ) -> Option<Seen> {
         if !self.learned {
             return None;
         }
@@ -422,7 +430,7 @@ impl GradientFilter {
         // shift answers for the four shifts it covers (a smoothed response
         // sampled every second shift, so that a sharp peak between the
         // samples is not missed), at a quarter of the products.
-        let (coarse, psr) = self.coarse(&reading)?;
+        let (coarse, psr) = self.coarse(&reading, work)?;
         // Then every shift about the coarse best, climbing while the best
         // is on the edge of those evaluated.
         let mut at = (2 * coarse.0, 2 * coarse.1);
@@ -480,21 +488,30 @@ impl GradientFilter {
     /// match at one size against another). Each size is normalised over its
     /// own cells: larger cells see larger differences between their points
     /// on smooth content, which would otherwise favour growing.
-    fn at_scale(&self, frame: &Frame<'_>, e: &Ellipse, cell: (Real, Real), scale: Real) -> Option<Real> {
+    /// Its cells are read into `work` (lent memory, as for [`Cue::place`]).
+    fn at_scale(
+        &self,
+        frame: &Frame<'_>,
+        (e, cell, scale): (&Ellipse, (Real, Real), Real),
+        work: &mut [u16],
+    ) -> Option<Real> {
         // A lattice one cell wider than the support, so that cell
         // `n / 2` (which starts at the centre) is the support's middle.
         const N: usize = SUPPORT + 1;
-        let mut cells = [0u8; CHANNELS * N * N];
-        if !channels::read(frame, (e.cx, e.cy), (cell.0 * scale, cell.1 * scale), N, &mut cells) {
+        let cells = bytemuck::cast_slice_mut::<u16, u8>(work).get_mut(..CHANNELS * N * N)?;
+        cells.fill(0);
+        if !channels::read(frame, (e.cx, e.cy), (cell.0 * scale, cell.1 * scale), N, cells) {
             return None;
         }
-        let reading = self.reading(&normalise(Lattice::whole(&cells, N), None)?);
-        self.response(&cells, N, &reading, (N / 2 - HALF) as i32, (N / 2 - HALF) as i32)
+        let reading = self.reading(&normalise(Lattice::whole(cells, N), None)?);
+        self.response(cells, N, &reading, (N / 2 - HALF) as i32, (N / 2 - HALF) as i32)
     }
 
     /// Learns the window around `e` at `rate` (the first window is learnt
-    /// whole, whatever the rate).
-    fn learn(&mut self, frame: &Frame<'_>, e: &Ellipse, rate: Real) {
+    /// whole, whatever the rate), its temporaries in `work` (nothing is
+    /// learnt in less than [`LEARNING_WORDS`] 4-byte aligned words).
+    fn learn(&mut self, frame: &Frame<'_>, e: &Ellipse, rate: Real, work: &mut [u16]) {
+        let Some(Room { spectrum: work, gain, cut }) = room(work) else { return };
         let cell = cell_size((e.hx, e.hy));
         let lattice = match self.window.take().and_then(|w| within(w, e, cell)) {
             Some((top, left)) => Lattice { cells: &self.cells, side: READ, top, left, n: LEARN },
@@ -509,11 +526,12 @@ impl GradientFilter {
         let Some(norm) = normalise(lattice, Some(&TAPER)) else { return };
         // Each channel is transformed twice (once for the energy sum, once
         // for its own solve) rather than all kept, so that one spectrum is
-        // on the stack at a time; all but the last.
-        let mut work: Spectrum = [[Complex32::new(0.0, 0.0); LEARN]; COLS];
-        let mut gain: Bins = [[LAMBDA; LEARN]; COLS];
+        // held at a time; all but the last. `transform` writes every bin.
+        for col in gain.iter_mut() {
+            col.fill(LAMBDA);
+        }
         for k in 0..CHANNELS {
-            transform(&mut work, lattice, &norm, k);
+            transform(work, lattice, &norm, k);
             for (gain, col) in gain.iter_mut().zip(work.iter()) {
                 for (e, x) in gain.iter_mut().zip(col.iter()) {
                     *e += x.re * x.re + x.im * x.im;
@@ -528,22 +546,66 @@ impl GradientFilter {
             }
         }
         let eta = if self.learned { rate } else { 1.0 };
-        let mut cut: Cut = [[0.0; SUPPORT]; SUPPORT];
+        for row in cut.iter_mut() {
+            row.fill(0.0);
+        }
         // The last channel transformed is still in `work`: solved first.
         for k in (0..CHANNELS).rev().take(1).chain(0..CHANNELS - 1) {
             if k + 1 < CHANNELS {
-                transform(&mut work, lattice, &norm, k);
+                transform(work, lattice, &norm, k);
             }
-            solve(&mut work, &gain, &mut cut);
+            solve(work, gain, cut);
             if let (Some(weights), Some(sum), Some(scale)) =
                 (self.weights.get_mut(k), self.sums.get_mut(k), self.scales.get_mut(k))
             {
-                blend((weights, sum, scale), &cut, eta);
+                blend((weights, sum, scale), cut, eta);
             }
         }
         self.learned = true;
         self.waiting = 0;
     }
+}
+
+/// 4-byte words the learning's temporaries take ([`Room`]).
+pub(crate) const LEARNING_WORDS: usize = 2 * LEARN * COLS + LEARN * COLS + SUPPORT * SUPPORT;
+
+/// The learning's temporaries: one channel's spectrum, the channels'
+/// energy sum (then the solve's gain) and one channel's cut filter.
+struct Room<'a> {
+    spectrum: &'a mut Spectrum,
+    gain: &'a mut Bins,
+    cut: &'a mut Cut,
+}
+
+/// The learning's temporaries laid out in `work`, if it is 4-byte aligned
+/// and holds [`LEARNING_WORDS`] words (the tracker lends its foreground
+/// map's sums, which do: `tracker::scratch` checks the size when built).
+fn room(work: &mut [u16]) -> Option<Room<'_>> {
+    let words: &mut [Real] = bytemuck::try_cast_slice_mut(work.get_mut(..2 * LEARNING_WORDS)?).ok()?;
+    let (spectrum, rest) = words.split_at_mut_checked(2 * LEARN * COLS)?;
+    let (gain, cut) = rest.split_at_mut_checked(LEARN * COLS)?;
+    let spectrum: &mut [[Complex32; LEARN]] = bytemuck::try_cast_slice_mut(spectrum).ok()?;
+    let gain: &mut [[Real; LEARN]] = bytemuck::try_cast_slice_mut(gain).ok()?;
+    let cut: &mut [[Real; SUPPORT]] = bytemuck::try_cast_slice_mut(cut).ok()?;
+    Some(Room { spectrum: spectrum.try_into().ok()?, gain: gain.try_into().ok()?, cut: cut.try_into().ok()? })
+}
+
+/// The filter pooled 2 x 2, as the coarse search reads it.
+type PooledWeights = [[[i32; POOLED_SUPPORT]; POOLED_SUPPORT]; CHANNELS];
+
+/// 4-byte words the coarse search's temporaries take (its pooled filter,
+/// then its pooled cells, bytes).
+pub(crate) const POOLED_WORDS: usize =
+    CHANNELS * POOLED_SUPPORT * POOLED_SUPPORT + (CHANNELS * POOLED * POOLED).div_ceil(4);
+
+/// The coarse search's temporaries laid out in `work`, if it is 4-byte
+/// aligned and holds [`POOLED_WORDS`] words (as [`room`]).
+fn pooled_room(work: &mut [u16]) -> Option<(&mut PooledWeights, &mut [u8; CHANNELS * POOLED * POOLED])> {
+    let words: &mut [i32] = bytemuck::try_cast_slice_mut(work.get_mut(..2 * POOLED_WORDS)?).ok()?;
+    let (weights, cells) = words.split_at_mut_checked(CHANNELS * POOLED_SUPPORT * POOLED_SUPPORT)?;
+    let weights: &mut [[[i32; POOLED_SUPPORT]; POOLED_SUPPORT]] = bytemuck::try_cast_slice_mut(weights).ok()?;
+    let cells: &mut [u8] = bytemuck::cast_slice_mut(cells);
+    Some((weights.try_into().ok()?, cells.get_mut(..CHANNELS * POOLED * POOLED)?.try_into().ok()?))
 }
 
 /// Where the learning window about `e`, of cells `cell`, lies in the read
@@ -714,12 +776,12 @@ fn transform(work: &mut Spectrum, lattice: Lattice<'_>, norm: &Norm, k: usize) {
 impl Cue for GradientFilter {
     type Settings = GradientCue;
 
-    fn start(&mut self, settings: Option<&GradientCue>, frame: &Frame<'_>, e: &Ellipse) {
+    fn start(&mut self, settings: Option<&GradientCue>, frame: &Frame<'_>, e: &Ellipse, work: &mut [u16]) {
         self.learned = false;
         self.waiting = 0;
         self.window = None;
         if settings.is_some() {
-            self.learn(frame, e, 1.0);
+            self.learn(frame, e, 1.0, work);
         }
     }
 
@@ -731,10 +793,10 @@ impl Cue for GradientFilter {
         &mut self,
         c: &GradientCue,
         frame: &Frame<'_>,
-        particles: &[Particle; N],
-        similarities: &mut [Real; N],
+        (particles, similarities): (&[Particle; N], &mut [Real; N]),
         n: usize,
         half_axes: (Real, Real),
+        work: &mut [u16],
     ) {
         let n = n.min(N);
         if n == 0 || !(c.blend > 0.0) {
@@ -745,7 +807,7 @@ impl Cue for GradientFilter {
             (mx, my) = (mx + p.x, my + p.y);
         }
         let centre = (mx / n as Real, my / n as Real);
-        let Some(seen) = self.look(frame, centre, half_axes) else { return };
+        let Some(seen) = self.look(frame, centre, half_axes, work) else { return };
         if !(seen.peak > 0.0) {
             return;
         }
@@ -785,11 +847,12 @@ impl Cue for GradientFilter {
         frame: &Frame<'_>,
         (ellipse, particles): (&mut Ellipse, &mut [Particle; N]),
         search: bool,
+        work: &mut [u16],
     ) -> Option<Real> {
         // The window about the estimate, where the search for the peak
         // starts (not the particles' mean, which the blend reads: the
         // estimate is measured the better centre, docs/accuracy.md).
-        let seen = self.look(frame, (ellipse.cx, ellipse.cy), (ellipse.hx, ellipse.hy))?;
+        let seen = self.look(frame, (ellipse.cx, ellipse.cy), (ellipse.hx, ellipse.hy), work)?;
         self.unlike = seen.psr < c.relearn_below;
         if seen.psr >= c.min_psr {
             let (x, y) = (seen.centre.0 + seen.at.0, seen.centre.1 + seen.at.1);
@@ -798,7 +861,7 @@ impl Cue for GradientFilter {
             if c.scale_step > 0.0 && search {
                 let mut best = None;
                 for s in [1.0, 1.0 + c.scale_step, 1.0 / (1.0 + c.scale_step)] {
-                    if let Some(r) = self.at_scale(frame, ellipse, seen.cell, s)
+                    if let Some(r) = self.at_scale(frame, (ellipse, seen.cell, s), work)
                         && best.is_none_or(|(b, _)| r > b)
                     {
                         best = Some((r, s));
@@ -817,12 +880,12 @@ impl Cue for GradientFilter {
     /// as a running mean over many frames it does not drift with one. A
     /// sure frame whose layout no longer matches is learnt at once
     /// ([`GradientCue::relearn_below`]).
-    fn adapt(&mut self, c: &GradientCue, frame: &Frame<'_>, e: &Ellipse, confidence: Real) {
+    fn adapt(&mut self, c: &GradientCue, frame: &Frame<'_>, e: &Ellipse, confidence: Real, work: &mut [u16]) {
         if confidence > c.learn_above {
             self.waiting = self.waiting.saturating_add(1);
             let turned = self.unlike && confidence > c.relearn_above;
             if !self.learned || self.waiting >= c.learn_every as u16 || turned {
-                self.learn(frame, e, c.rate);
+                self.learn(frame, e, c.rate, work);
             }
         }
         self.unlike = false;
@@ -862,6 +925,15 @@ mod tests {
         Frame::packed(px, W, H, PixelFormat::Gray8).unwrap()
     }
 
+    /// Working memory as the tracker lends it: 4-byte aligned, and as
+    /// large as the learning needs.
+    #[repr(C, align(4))]
+    struct Work([u16; 2 * LEARNING_WORDS]);
+
+    fn work() -> Box<Work> {
+        Box::new(Work([0; 2 * LEARNING_WORDS]))
+    }
+
     fn target() -> Ellipse {
         Ellipse { cx: 160.0, cy: 120.0, hx: 16.0, hy: 16.0 }
     }
@@ -893,18 +965,18 @@ mod tests {
         // cell's share (cells are 2.5 px here), and with a clear PSR.
         let first = blocks(0, 0);
         let mut f = GradientFilter::new();
-        f.learn(&frame(&first), &target(), 1.0);
+        f.learn(&frame(&first), &target(), 1.0, &mut work().0);
         assert!(f.learned);
         for (dx, dy) in [(0, 0), (7, -5), (-12, 9), (20, 3)] {
             let moved = blocks(dx, dy);
-            let seen = f.look(&frame(&moved), (160.0, 120.0), (16.0, 16.0)).unwrap();
+            let seen = f.look(&frame(&moved), (160.0, 120.0), (16.0, 16.0), &mut work().0).unwrap();
             assert!((seen.at.0 - dx as Real).abs() < 1.5, "({dx}, {dy}): x at {:?}", seen.at);
             assert!((seen.at.1 - dy as Real).abs() < 1.5, "({dx}, {dy}): y at {:?}", seen.at);
             assert!(seen.psr > 5.0, "({dx}, {dy}): psr {}", seen.psr);
         }
         // Read about another centre: the same place in the frame.
         let moved = blocks(7, -5);
-        let seen = f.look(&frame(&moved), (150.0, 126.0), (16.0, 16.0)).unwrap();
+        let seen = f.look(&frame(&moved), (150.0, 126.0), (16.0, 16.0), &mut work().0).unwrap();
         assert!((150.0 + seen.at.0 - 167.0).abs() < 1.5 && (126.0 + seen.at.1 - 115.0).abs() < 1.5, "{:?}", seen.at);
     }
 
@@ -942,12 +1014,12 @@ mod tests {
         // border's share: its orientations weigh little under the taper,
         // but the joint solve's weak regulariser passes some of them on.
         let mut fresh = GradientFilter::new();
-        fresh.learn(&frame(&px), &e, 1.0);
+        fresh.learn(&frame(&px), &e, 1.0, &mut work().0);
         let mut reused = GradientFilter::new();
-        reused.learn(&frame(&px), &target(), 1.0);
-        assert!(reused.look(&frame(&px), (160.0, 120.0), (16.0, 16.0)).is_some());
+        reused.learn(&frame(&px), &target(), 1.0, &mut work().0);
+        assert!(reused.look(&frame(&px), (160.0, 120.0), (16.0, 16.0), &mut work().0).is_some());
         assert!(reused.window.is_some());
-        reused.learn(&frame(&px), &e, 1.0);
+        reused.learn(&frame(&px), &e, 1.0, &mut work().0);
         assert!(reused.window.is_none(), "the window is used once");
         for k in 0..CHANNELS {
             let (a, b) = (&fresh.weights[k], &reused.weights[k]);
@@ -999,15 +1071,34 @@ mod tests {
         for (px, confidence, learns) in [(&first, 0.95, false), (&turned, 0.75, false), (&turned, 0.95, true)] {
             let mut f = GradientFilter::new();
             let mut e = target();
-            f.learn(&frame(&first), &e, c.rate);
+            f.learn(&frame(&first), &e, c.rate, &mut work().0);
             let mut ps = [Particle::default(); 4];
-            let psr = f.place(&c, &frame(px), (&mut e, &mut ps), false).unwrap();
+            let psr = f.place(&c, &frame(px), (&mut e, &mut ps), false, &mut work().0).unwrap();
             assert_eq!(psr < c.relearn_below, learns || confidence < c.relearn_above, "PSR {psr}");
             let before = f.weights;
-            f.adapt(&c, &frame(px), &e, confidence);
+            f.adapt(&c, &frame(px), &e, confidence, &mut work().0);
             assert_eq!(f.weights != before, learns, "confidence {confidence}, PSR {psr}");
             assert_eq!(f.waiting, if learns { 0 } else { 1 });
         }
+    }
+
+    #[test]
+    fn the_learning_takes_its_room_only_from_aligned_memory_that_holds_it() {
+        // Reason: the invariant `room` checks instead of trusting: the
+        // spectrum, the energy sum and the cut filter are 4-byte values. In
+        // memory off a 4-byte boundary, or a word short, there is no room
+        // and nothing is learnt; in the tracker's lent memory (aligned,
+        // large enough) there is, and the filter learns.
+        let mut w = work();
+        assert!(room(&mut w.0).is_some());
+        assert!(room(&mut w.0[1..]).is_none(), "off a 4-byte boundary");
+        assert!(room(&mut w.0[..2 * LEARNING_WORDS - 2]).is_none(), "a word short");
+        let px = blocks(0, 0);
+        let mut f = GradientFilter::new();
+        f.learn(&frame(&px), &target(), 1.0, &mut w.0[1..]);
+        assert!(!f.learned);
+        f.learn(&frame(&px), &target(), 1.0, &mut w.0);
+        assert!(f.learned);
     }
 
     #[test]
@@ -1016,11 +1107,11 @@ mod tests {
         // (the invariant `normalise` guards).
         let flat = vec![90u8; W * H];
         let mut f = GradientFilter::new();
-        f.learn(&frame(&flat), &target(), 1.0);
+        f.learn(&frame(&flat), &target(), 1.0, &mut work().0);
         assert!(!f.learned);
         let first = blocks(0, 0);
-        f.learn(&frame(&first), &target(), 1.0);
-        assert!(f.look(&frame(&flat), (160.0, 120.0), (16.0, 16.0)).is_none());
+        f.learn(&frame(&first), &target(), 1.0, &mut work().0);
+        assert!(f.look(&frame(&flat), (160.0, 120.0), (16.0, 16.0), &mut work().0).is_none());
     }
 
     #[test]
@@ -1033,7 +1124,7 @@ mod tests {
         let first = blocks(0, 0);
         let moved = blocks(9, 4);
         let mut f = GradientFilter::new();
-        f.learn(&frame(&first), &target(), 1.0);
+        f.learn(&frame(&first), &target(), 1.0, &mut work().0);
         // Six on the target, one two boxes away, one outside the window
         // (the window is centred on their mean, (191.75, 119.25)).
         let places = [(169.0, 124.0); 6].into_iter().chain([(120.0, 90.0), (400.0, 120.0)]);
@@ -1043,7 +1134,7 @@ mod tests {
         }
         let mut sims = [0.5; 8];
         let c = GradientCue { blend: 0.3, ..GradientCue::MEASURED };
-        f.rescore(&c, &frame(&moved), &ps, &mut sims, 8, (16.0, 16.0));
+        f.rescore(&c, &frame(&moved), (&ps, &mut sims), 8, (16.0, 16.0), &mut work().0);
         let kept = 0.5 * (1.0 - c.blend);
         assert!(sims[0] > kept + 0.8 * c.blend, "{sims:?}");
         assert!(sims.iter().take(6).all(|&s| s == sims[0]), "{sims:?}");

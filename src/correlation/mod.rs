@@ -18,10 +18,10 @@ use crate::error::{ConfigError, check, positive};
 use crate::scalar::Real;
 
 #[cfg(feature = "correlation")]
-pub(crate) use filter::CorrelationFilter as Correlation;
+pub(crate) use filter::{CorrelationFilter as Correlation, SPECTRUM_WORDS};
 
 #[cfg(feature = "gradient")]
-pub(crate) use gradient::GradientFilter as Gradient;
+pub(crate) use gradient::{GradientFilter as Gradient, LEARNING_WORDS, POOLED_WORDS};
 
 /// The cue in a build without the `gradient` feature.
 #[cfg(not(feature = "gradient"))]

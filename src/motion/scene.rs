@@ -437,7 +437,7 @@ impl SceneMotion {
 impl Cue for SceneMotion {
     type Settings = super::On;
 
-    fn start(&mut self, on: Option<&super::On>, frame: &Frame<'_>, e: &Ellipse) {
+    fn start(&mut self, on: Option<&super::On>, frame: &Frame<'_>, e: &Ellipse, _: &mut [u16]) {
         if on.is_some() {
             SceneMotion::start(self, frame, e);
         }

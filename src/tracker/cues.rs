@@ -25,8 +25,8 @@ macro_rules! cues {
             }
 
             /// [`Cue::start`] of every cue.
-            pub(super) fn start(&mut self, cfg: &Config, frame: &Frame<'_>, e: &Ellipse) {
-                $(Cue::start(&mut self.$name, ($settings)(cfg).as_ref(), frame, e);)*
+            pub(super) fn start(&mut self, cfg: &Config, frame: &Frame<'_>, e: &Ellipse, work: &mut [u16]) {
+                $(Cue::start(&mut self.$name, ($settings)(cfg).as_ref(), frame, e, work);)*
             }
 
             /// [`Cue::rescore`] of every cue that is on.
@@ -34,13 +34,13 @@ macro_rules! cues {
                 &mut self,
                 cfg: &Config,
                 frame: &Frame<'_>,
-                particles: &[Particle; N],
-                similarities: &mut [Real; N],
+                (particles, similarities): (&[Particle; N], &mut [Real; N]),
                 n: usize,
                 half_axes: (Real, Real),
+                work: &mut [u16],
             ) {
                 $(if let Some(s) = ($settings)(cfg) {
-                    Cue::rescore(&mut self.$name, &s, frame, particles, similarities, n, half_axes);
+                    Cue::rescore(&mut self.$name, &s, frame, (particles, &mut *similarities), n, half_axes, work);
                 })*
             }
 
@@ -52,10 +52,11 @@ macro_rules! cues {
                 frame: &Frame<'_>,
                 (ellipse, particles): (&mut Ellipse, &mut [Particle; N]),
                 search: bool,
+                work: &mut [u16],
             ) -> Real {
                 let mut psr = 0.0;
                 $(if let Some(s) = ($settings)(cfg)
-                    && let Some(p) = Cue::place(&mut self.$name, &s, frame, (&mut *ellipse, &mut *particles), search)
+                    && let Some(p) = Cue::place(&mut self.$name, &s, frame, (&mut *ellipse, &mut *particles), search, work)
                 {
                     psr = p;
                 })*
@@ -73,9 +74,9 @@ macro_rules! cues {
             }
 
             /// [`Cue::adapt`] of every cue that is on.
-            pub(super) fn adapt(&mut self, cfg: &Config, frame: &Frame<'_>, e: &Ellipse, confidence: Real) {
+            pub(super) fn adapt(&mut self, cfg: &Config, frame: &Frame<'_>, e: &Ellipse, confidence: Real, work: &mut [u16]) {
                 $(if let Some(s) = ($settings)(cfg) {
-                    Cue::adapt(&mut self.$name, &s, frame, e, confidence);
+                    Cue::adapt(&mut self.$name, &s, frame, e, confidence, work);
                 })*
             }
         }

@@ -294,7 +294,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         self.settled = false;
         // No confidence yet: the first step observes every hypothesis.
         self.diag = Diagnostics::default();
-        self.cues.start(&self.config, frame, &e);
+        self.cues.start(&self.config, frame, &e, scratch.fgmap.lend());
         Ok(Estimate::initialised(e, N as u16, self.config.likelihood.sigma_for(0.0)))
     }
 
@@ -318,7 +318,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         self.state = TrackState::Searching;
         self.misses = 0;
         self.settled = false;
-        self.cues.start(&self.config, frame, &Ellipse::from_box(&bbox));
+        self.cues.start(&self.config, frame, &Ellipse::from_box(&bbox), scratch.fgmap.lend());
         Ok(())
     }
 

@@ -98,6 +98,15 @@ pub(crate) struct Scratch<const K: usize, const E: usize> {
 /// Running sums of the foreground map (a 64 x 64 lattice).
 pub(super) const FG_CELLS: usize = 4096;
 
+// The map's sums are lent to the cues as working memory where the map is
+// dead (`ForegroundMap::lend`): the correlation filters' spectra and the
+// gradient filter's coarse search lie in them.
+#[cfg(feature = "correlation")]
+const _: () = assert!(2 * crate::correlation::SPECTRUM_WORDS <= FG_CELLS);
+#[cfg(feature = "gradient")]
+const _: () =
+    assert!(2 * crate::correlation::LEARNING_WORDS <= FG_CELLS && 2 * crate::correlation::POOLED_WORDS <= FG_CELLS);
+
 impl<const K: usize, const E: usize> Scratch<K, E> {
     /// Empty working memory.
     pub(crate) fn new() -> Self {

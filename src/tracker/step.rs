@@ -57,7 +57,10 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         let observed = self.observe(scratch, frame, apart, n);
         if let Some(t) = self.target.as_ref() {
             let half_axes = t.half_axes;
-            self.cues.rescore(&self.config, frame, &self.particles, &mut self.weights, n, half_axes);
+            // The foreground map is dead from the prediction's re-detection
+            // until the estimate builds it again: the cues work in its memory.
+            let work = scratch.fgmap.lend();
+            self.cues.rescore(&self.config, frame, (&self.particles, &mut self.weights), n, half_axes, work);
         }
         let sigma = self.weigh(observed.d2_max, n);
         // An external size measurement, or the table's fixed size, decides
@@ -308,7 +311,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
             mean_state(particles.get(..n).unwrap_or(particles), weights.get(..n).unwrap_or(weights)).ellipse();
         // The texture cue first, so that the searches and the confidence
         // measure the box where it leaves it.
-        let psr = cues.place(cfg, frame, (&mut ellipse, particles), search);
+        let psr = cues.place(cfg, frame, (&mut ellipse, particles), search, scratch.fgmap.lend());
         let Some(target) = target.as_ref() else {
             return Look { ellipse, confidence: 0.0, similarity: 0.0, found: false, occluded_quadrant: None };
         };
@@ -422,7 +425,9 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
     ) -> bool {
         let Track { config: cfg, target, state, misses, cues, .. } = self;
         let Some(target) = target.as_mut() else { return false };
-        cues.adapt(cfg, frame, &look.ellipse, look.confidence);
+        // The foreground map is dead once the step has estimated: the cues
+        // learn in its memory.
+        cues.adapt(cfg, frame, &look.ellipse, look.confidence, scratch.fgmap.lend());
         let steady = *state == TrackState::Tracking && event.is_none() && *misses == 0 && cfg.alpha > 0.0;
         let d2_max = target.models.d2_max(cfg);
         let wanted = match cfg.model_update {
