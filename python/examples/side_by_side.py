@@ -4,14 +4,16 @@ video; a summary of each tracker's ms per frame (and, with ground truth,
 its success AUC) at the end.
 
     python python/examples/side_by_side.py INPUT BOX|--truth \\
-        [--nanotrack DIR] [--frames N] [--out side_by_side.mp4]
+        [--nanotrack DIR] [--frames N] [--out side_by_side.mp4] [--config accurate]
 
 INPUT is a video file (anything cv2.VideoCapture opens) or an OTB folder
 (img/ with the frames, groundtruth.txt whose first line is the box). BOX is
 x,y,w,h in the first frame (taken from groundtruth.txt for an OTB folder).
 --nanotrack names the folder with NanoTrack's two ONNX files
 (nanotrack_backbone_sim.onnx, nanotrack_head_sim.onnx); without it
-NanoTrack is left out. Needs opencv-contrib-python(-headless) >= 4.7.
+NanoTrack is left out. --config accurate runs pftrack's Config::accurate
+(both correlation filters) instead of its defaults. Needs
+opencv-contrib-python(-headless) >= 4.7.
 """
 
 import argparse
@@ -66,10 +68,9 @@ def iou(a, b):
 
 
 class Pf:
-    name = "pftrack"
-
-    def __init__(self):
-        self.t = pftrack.Tracker(seed=1)
+    def __init__(self, config):
+        self.name = "pftrack" if config == "default" else f"pftrack ({config})"
+        self.t = pftrack.Tracker(seed=1, config=config)
 
     def init(self, frame, box):
         self.t.init(frame, box)
@@ -91,8 +92,8 @@ class OpenCv:
         return (tuple(float(v) for v in box) if ok else None), (self.score() if self.score else float(ok))
 
 
-def trackers(nanotrack):
-    out = [Pf(), OpenCv("CSRT", cv2.TrackerCSRT_create())]
+def trackers(nanotrack, config):
+    out = [Pf(config), OpenCv("CSRT", cv2.TrackerCSRT_create())]
     if nanotrack:
         p = cv2.TrackerNano_Params()
         p.backbone = str(Path(nanotrack) / "nanotrack_backbone_sim.onnx")
@@ -109,6 +110,7 @@ def main():
     ap.add_argument("--nanotrack", help="the folder with NanoTrack's two ONNX files")
     ap.add_argument("--frames", type=int, default=0, help="at most this many frames (0: all)")
     ap.add_argument("--out", default="side_by_side.mp4")
+    ap.add_argument("--config", default="default", choices=("default", "accurate"), help="pftrack's configuration")
     a = ap.parse_args()
 
     truth = truth_of(a.input)
@@ -118,7 +120,7 @@ def main():
         box = truth[0]
     else:
         sys.exit("give the first box: x,y,w,h")
-    ts = trackers(a.nanotrack)
+    ts = trackers(a.nanotrack, a.config)
     writer, seconds, overlaps = None, {t.name: 0.0 for t in ts}, {t.name: [] for t in ts}
     for n, frame in enumerate(frames_of(a.input)):
         if a.frames and n >= a.frames:
@@ -139,10 +141,10 @@ def main():
                 overlaps[t.name].append(iou(result, truth[n]) if result else 0.0)
             if result:
                 x, y, w, h = (int(round(v)) for v in result)
-                cv2.rectangle(shown, (x, y), (x + w, y + h), COLOURS[t.name], 2)
+                cv2.rectangle(shown, (x, y), (x + w, y + h), COLOURS[t.name.split(" ")[0]], 2)
                 # Labels stacked above the box, one line a tracker.
                 cv2.putText(shown, f"{t.name} {score:.2f}", (x, max(12 * (i + 1), y - 4 - 12 * i)),
-                            cv2.FONT_HERSHEY_SIMPLEX, 0.4, COLOURS[t.name], 1)
+                            cv2.FONT_HERSHEY_SIMPLEX, 0.4, COLOURS[t.name.split(" ")[0]], 1)
         writer.write(shown)
     if writer is None:
         sys.exit(f"{a.input}: no frames")

@@ -216,10 +216,23 @@ fn pixels<'py, 'b>(
     ))
 }
 
-/// The configuration from keyword settings over the defaults.
+/// The configuration from keyword settings over the one `config` names
+/// (`"default"` unless given; `"accurate"`: `Config::accurate`), whatever
+/// the keywords' order.
 fn config_of(settings: Option<&Bound<'_, PyDict>>) -> PyResult<Config> {
-    let mut c = Config::default();
-    let Some(settings) = settings else { return Ok(c) };
+    let Some(settings) = settings else { return Ok(Config::default()) };
+    let mut c = match settings.get_item("config")? {
+        None => Config::default(),
+        Some(v) => match v.extract::<String>()?.as_str() {
+            "default" => Config::default(),
+            "accurate" => Config::accurate(),
+            other => {
+                return Err(PyValueError::new_err(format!(
+                    "config: {other:?} is neither \"default\" nor \"accurate\""
+                )));
+            }
+        },
+    };
     let (mut lost_below, mut found_above) = match c.life {
         Life::Confidence { lost_below, found_above } => (lost_below, found_above),
         Life::Appearance => (0.6, 0.8),
@@ -227,6 +240,7 @@ fn config_of(settings: Option<&Bound<'_, PyDict>>) -> PyResult<Config> {
     for (key, value) in settings.iter() {
         let key: String = key.extract()?;
         match key.as_str() {
+            "config" => {}
             "lost_below" => lost_below = value.extract()?,
             "found_above" => found_above = value.extract()?,
             "alpha" => c.alpha = value.extract()?,
@@ -250,7 +264,7 @@ fn config_of(settings: Option<&Bound<'_, PyDict>>) -> PyResult<Config> {
             "sure_share" => c.sure_share = value.extract()?,
             other => {
                 return Err(PyTypeError::new_err(format!(
-                    "unknown setting {other:?}: lost_below, found_above, alpha, lost_after, correlation, scene_motion, redetect, sure_share"
+                    "unknown setting {other:?}: config, lost_below, found_above, alpha, lost_after, correlation, scene_motion, redetect, sure_share"
                 )));
             }
         }

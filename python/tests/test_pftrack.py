@@ -57,10 +57,10 @@ def read_fixture(path):
     return FORMATS[code], width, height, stride, box, frames
 
 
-def python_track(path, seed):
+def python_track(path, seed, **settings):
     fmt, w, h, stride, box, frames = read_fixture(path)
     raw = (fmt, w, h, stride)
-    t = pftrack.Tracker(seed=seed)
+    t = pftrack.Tracker(seed=seed, **settings)
     assert t.init(frames[0], box, raw=raw)
     rows = [(1, "tracking", "initialised", 1.0, tuple(map(f32, box)))]
     for n, frame in enumerate(frames[1:], 2):
@@ -70,13 +70,14 @@ def python_track(path, seed):
     return rows
 
 
-def rust_track(path, seed):
+def rust_track(path, seed, *sets):
     if not TRACK.exists():
-        pytest.fail(f"{TRACK} missing: cargo build --release -p host-tests --bin track")
+        pytest.fail(f"{TRACK} missing: cargo build --release -p host-tests --features gradient --bin track")
     box = ",".join(repr(v) for v in read_fixture(path)[4])
-    out = subprocess.run(
-        [str(TRACK), "run", str(path), "--box", box, "--seed", str(seed)], capture_output=True, text=True, check=True
-    ).stdout
+    args = [str(TRACK), "run", str(path), "--box", box, "--seed", str(seed)]
+    for s in sets:
+        args += ["--set", s]
+    out = subprocess.run(args, capture_output=True, text=True, check=True).stdout
     rows = []
     for line in out.splitlines():
         r = json.loads(line)
@@ -89,6 +90,17 @@ def test_every_fixture_tracks_as_the_rust_tool_does(path):
     # Reason: a cross-check of two interfaces to one core on the same
     # frames and seed.
     assert python_track(path, 1) == rust_track(path, 1)
+
+
+@pytest.mark.parametrize("path", FIXTURES, ids=lambda p: p.stem)
+def test_the_accurate_configuration_tracks_as_the_rust_tool_does(path):
+    # Reason: the same cross-check for `Config::accurate`, which the wheel
+    # builds the gradient filter for (`track` built with `--features
+    # gradient`), with a setting over it to show the keywords apply after
+    # `config` whatever their order.
+    settings = {"lost_below": 0.55, "config": "accurate"}
+    assert python_track(path, 2, **settings) == rust_track(path, 2, "config=accurate", "life=confidence:0.55:0.8")
+    assert python_track(path, 2, config="accurate") != python_track(path, 2), "accurate is another configuration"
 
 
 PARTICLES = (25, 50, 100, 200, 400)
@@ -202,6 +214,8 @@ def test_bad_input_raises_not_crashes():
         pftrack.Tracker(sigma=0.2)
     with pytest.raises(ValueError, match="redetect"):
         pftrack.Tracker(redetect="everywhere")
+    with pytest.raises(ValueError, match="config"):
+        pftrack.Tracker(config="fast")
     for choice in ("off", "near", "frame"):
         pftrack.Tracker(redetect=choice)
     t.init(square(0), (40, 50, 20, 20))
