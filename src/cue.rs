@@ -30,7 +30,8 @@ pub(crate) trait Cue {
 
     /// Mixes the cue's own score of each of the first `n` particles into
     /// its similarity in `similarities` (before the similarities are
-    /// weighed), for a target of half axes `half_axes`.
+    /// weighed), for a target of half axes `half_axes` (`work` as for
+    /// [`Cue::start`]).
     #[allow(unused_variables)]
     fn rescore<const N: usize>(
         &mut self,
@@ -45,8 +46,9 @@ pub(crate) trait Cue {
 
     /// Looks at the frame around the filter's mean state before the size
     /// and position searches, and may move the estimate and its particles
-    /// with it (`search` false: the size is decided elsewhere this frame).
-    /// Returns the peak-to-sidelobe ratio of its response, if it has one.
+    /// with it (`search` false: the size is decided elsewhere this frame;
+    /// `work` as for [`Cue::start`]). Returns the peak-to-sidelobe ratio of
+    /// its response, if it has one.
     #[allow(unused_variables)]
     fn place<const N: usize>(
         &mut self,
