@@ -297,9 +297,10 @@ impl<const F: usize> ForegroundMap<F> {
         self.compute(frame, rect, layout, fg);
     }
 
-    /// The map's running sums as working memory, 4-byte aligned, for the
-    /// end of a step: the map is built afresh wherever it is read, so its
-    /// sums are dead once the step has estimated. The map is left empty.
+    /// The map's running sums as working memory, 4-byte aligned. The map
+    /// is built afresh wherever it is read (the prediction's re-detection,
+    /// the estimate), so between those and after the estimate its sums
+    /// hold nothing anyone reads. The map is left empty.
     pub(crate) fn lend(&mut self) -> &mut [u16] {
         (self.cols, self.rows) = (0, 0);
         &mut self.sums.0

@@ -99,8 +99,8 @@ pub(crate) struct Scratch<const K: usize, const E: usize> {
 pub(super) const FG_CELLS: usize = 4096;
 
 // The map's sums are lent to the cues as working memory where the map is
-// dead (`ForegroundMap::lend`): the correlation filters' spectra and the
-// gradient filter's coarse search lie in them.
+// dead (`ForegroundMap::lend`): the correlation filters' spectra, the
+// gradient filter's coarse search and its learning lie in them.
 #[cfg(feature = "correlation")]
 const _: () = assert!(2 * crate::correlation::SPECTRUM_WORDS <= FG_CELLS);
 #[cfg(feature = "gradient")]
