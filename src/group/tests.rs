@@ -56,15 +56,24 @@ fn a_group_of_one_is_a_tracker_with_the_same_seed() {
     // Reason: cross-check of two paths. With no other target there is
     // nothing to keep apart from, and target 0 draws from the group's seed,
     // so the group repeats the lone tracker's computation bit for bit, with
-    // all hypotheses or a share of them (no other target comes near).
+    // all hypotheses or a share of them (no other target comes near), and
+    // with the gradient filter, whose working memory is lent from the
+    // group's shared scratch rather than the tracker's own.
     let path = |t: usize| (30.0 + 2.5 * t as f32, 48.0 + 6.0 * (t as f32 * 0.3).sin());
     let first = scene(&[path(0)], 16, 0);
     let shared = Config { sure_share: 0.6, ..Config::default() };
-    for (seed, cfg) in [(1, Config::default()), (7, Config::default()), (1, shared), (7, shared)] {
+    let mut cases = vec![(1, Config::default()), (7, Config::default()), (1, shared), (7, shared)];
+    if cfg!(feature = "gradient") {
+        let without = Config { gradient: None, ..Config::accurate() };
+        cases.extend([(1, Config::accurate()), (7, Config::accurate()), (1, without)]);
+    }
+    let mut tracks = Vec::new();
+    for (seed, cfg) in cases {
         let mut lone: Tracker<60> = Tracker::new(cfg, seed).unwrap();
         let mut group: Group<2, 60> = Group::new(cfg, seed).unwrap();
         lone.init(&frame(&first), square(path(0), 16)).unwrap();
         let id = group.add(&frame(&first), square(path(0), 16)).unwrap().id;
+        let mut track = String::new();
         for t in 1..30 {
             let px = scene(&[path(t)], 16, t);
             let a = lone.step(&frame(&px)).unwrap();
@@ -72,7 +81,13 @@ fn a_group_of_one_is_a_tracker_with_the_same_seed() {
             assert_eq!(b.len(), 1);
             assert_eq!(b[0].id, id);
             assert_eq!(format!("{a:?}"), format!("{:?}", b[0].estimate), "seed {seed}, frame {t}");
+            track += &format!("{a:?}");
         }
+        tracks.push(track);
+    }
+    // The gradient filter took part: without it the track is another.
+    if cfg!(feature = "gradient") {
+        assert_ne!(tracks.get(4), tracks.get(6));
     }
 }
 
