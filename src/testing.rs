@@ -1,5 +1,12 @@
 //! Helpers shared by the unit tests.
 
+/// Memory as the tracker lends it to the cues: a foreground map's sums
+/// ([`crate::foreground::ForegroundMap::lend`]), boxed off the test's stack.
+#[cfg(feature = "correlation")]
+pub(crate) fn lent() -> Box<crate::foreground::ForegroundMap<4096>> {
+    Box::new(crate::foreground::ForegroundMap::new())
+}
+
 /// A repeatable stream of 32-bit states for test scenes: the linear
 /// congruential generator of Numerical Recipes (`s ← 1664525·s + 1013904223`),
 /// its new state per call. For pictures and random inputs, not statistics;

@@ -294,17 +294,15 @@ fn slot(r: usize, c: usize) -> Slot {
 /// while the filter reads a window: the tracker need not keep it).
 const EMPTY: Spectrum = [[Complex32::new(0.0, 0.0); COLS]; GRID];
 
-/// 4-byte words a spectrum takes.
-pub(crate) const SPECTRUM_WORDS: usize = 2 * GRID * COLS;
+/// Bytes of lent memory the filter needs: one spectrum (the tracker lends
+/// its foreground map's sums, which hold it: `tracker::scratch` checks).
+pub(crate) const WORK_BYTES: usize = core::mem::size_of::<Spectrum>();
 
-/// An empty spectrum laid out in `work`, if it is 4-byte aligned and holds
-/// [`SPECTRUM_WORDS`] words (the tracker lends its foreground map's sums,
-/// which do: `tracker::scratch` checks the size when built). In lent memory
-/// rather than on the stack: the filter's three uses of a spectrum
+/// An empty spectrum laid out in `work` (see [`super::carve`]). In lent
+/// memory rather than on the stack: the filter's three uses of a spectrum
 /// (learning, the response, a scale's peak) each took 1.2 KB of it.
 fn spectrum(work: &mut [u16]) -> Option<&mut Spectrum> {
-    let rows: &mut [[Complex32; COLS]] = bytemuck::try_cast_slice_mut(work.get_mut(..2 * SPECTRUM_WORDS)?).ok()?;
-    let spectrum: &mut Spectrum = rows.try_into().ok()?;
+    let (spectrum, _) = super::carve::<[Complex32; COLS], GRID>(work)?;
     *spectrum = EMPTY;
     Some(spectrum)
 }
@@ -327,7 +325,7 @@ impl CorrelationFilter {
     /// Learns the window around `e` at `rate` (the first window is learnt
     /// whole, whatever the rate).
     /// Its spectrum lies in `work` (lent memory, see [`Cue::start`]):
-    /// nothing is learnt in less than [`SPECTRUM_WORDS`] aligned words.
+    /// nothing is learnt in less than [`WORK_BYTES`], 4-byte aligned.
     pub(crate) fn learn(&mut self, frame: &Frame<'_>, e: &Ellipse, (padding, rate): (Real, Real), work: &mut [u16]) {
         let Some(work) = spectrum(work) else { return };
         if !transform(work, frame, e, padding) {
@@ -793,14 +791,7 @@ mod tests {
     const W: usize = 160;
     const H: usize = 120;
 
-    /// Working memory as the tracker lends it: 4-byte aligned, and as
-    /// large as a spectrum.
-    #[repr(C, align(4))]
-    struct Work([u16; 2 * SPECTRUM_WORDS]);
-
-    fn work() -> Box<Work> {
-        Box::new(Work([0; 2 * SPECTRUM_WORDS]))
-    }
+    use crate::testing::lent;
 
     /// A smooth grey texture (sums of slanted waves, no period within a
     /// window), its content moved by `(dx, dy)` pixels.
@@ -942,7 +933,7 @@ mod tests {
         let mut window = EMPTY;
         assert!(transform(&mut window, &f, &e, 2.0));
         let mut filter = CorrelationFilter::new();
-        filter.learn(&f, &e, (2.0, 0.05), &mut work().0);
+        filter.learn(&f, &e, (2.0, 0.05), lent().lend());
         let work = window;
         let largest = work.iter().flatten().map(|v| v.norm_sqr()).fold(0.0, Real::max);
         for (r, row) in work.iter().enumerate() {
@@ -977,11 +968,11 @@ mod tests {
         // cell after the sub-cell fit.
         let first = texture(0.0, 0.0, WAVES);
         let mut filter = CorrelationFilter::new();
-        assert_eq!(filter.respond(&frame(&first), &target(), (2.0, 0.0), &mut work().0), None, "nothing learnt yet");
-        filter.learn(&frame(&first), &target(), (2.0, 0.05), &mut work().0);
+        assert_eq!(filter.respond(&frame(&first), &target(), (2.0, 0.0), lent().lend()), None, "nothing learnt yet");
+        filter.learn(&frame(&first), &target(), (2.0, 0.05), lent().lend());
         for (dx, dy) in [(3.0, -2.0), (-5.0, 4.0), (0.0, 0.0)] {
             let moved = texture(dx, dy, WAVES);
-            let r = filter.respond(&frame(&moved), &target(), (2.0, 0.0), &mut work().0).unwrap();
+            let r = filter.respond(&frame(&moved), &target(), (2.0, 0.0), lent().lend()).unwrap();
             assert!(
                 (r.shift.0 as f64 - dx).abs() < 1.0 && (r.shift.1 as f64 - dy).abs() < 0.75,
                 "moved by ({dx}, {dy}), found {:?}",
@@ -991,7 +982,7 @@ mod tests {
             // response is flatter than the moved texture's (measured: a
             // PSR of about 3 against 6 to 7).
             let other = texture(0.0, 0.0, OTHER);
-            let o = filter.respond(&frame(&other), &target(), (2.0, 0.0), &mut work().0).unwrap();
+            let o = filter.respond(&frame(&other), &target(), (2.0, 0.0), lent().lend()).unwrap();
             assert!(o.psr < 0.6 * r.psr, "PSR {} on an unseen texture against {} on the target", o.psr, r.psr);
         }
     }
@@ -1008,15 +999,15 @@ mod tests {
         // bounds every value of it).
         let first = texture(0.0, 0.0, WAVES);
         let mut filter = CorrelationFilter::new();
-        filter.learn(&frame(&first), &target(), (2.0, 0.05), &mut work().0);
+        filter.learn(&frame(&first), &target(), (2.0, 0.05), lent().lend());
         let (cx, cy) = (4.0, 3.0); // the window's cells: 64 x 48 px over 16
         for (dx, dy) in [(3.0, -2.0), (-5.0, 4.0), (0.0, 0.0), (8.0, 6.0)] {
             let moved = texture(dx, dy, WAVES);
-            let r = filter.respond(&frame(&moved), &target(), (2.0, 0.0), &mut work().0).unwrap();
-            let near = filter.peak_near(&frame(&moved), &target(), (2.0, r.shift), &mut work().0).unwrap();
+            let r = filter.respond(&frame(&moved), &target(), (2.0, 0.0), lent().lend()).unwrap();
+            let near = filter.peak_near(&frame(&moved), &target(), (2.0, r.shift), lent().lend()).unwrap();
             assert!((near - r.peak).abs() <= 1e-5 * r.peak.abs(), "moved by ({dx}, {dy}): {near} against {}", r.peak);
             let away = (r.shift.0 + 5.0 * cx, r.shift.1 + 5.0 * cy);
-            let far = filter.peak_near(&frame(&moved), &target(), (2.0, away), &mut work().0).unwrap();
+            let far = filter.peak_near(&frame(&moved), &target(), (2.0, away), lent().lend()).unwrap();
             assert!(far < 0.9 * r.peak, "moved by ({dx}, {dy}): {far} five cells away against {}", r.peak);
         }
     }
@@ -1040,7 +1031,7 @@ mod tests {
         // against that lean (docs/accuracy.md).
         let first = blocks(1.0);
         let mut filter = CorrelationFilter::new();
-        filter.learn(&frame(&first), &target(), (2.0, 0.05), &mut work().0);
+        filter.learn(&frame(&first), &target(), (2.0, 0.05), lent().lend());
         let e = target();
         for (zoom, winner) in [(1.08, 0), (1.0 / 1.08, 2)] {
             let px = blocks(zoom);
@@ -1048,7 +1039,7 @@ mod tests {
                 .iter()
                 .map(|&s| {
                     let scaled = Ellipse { hx: e.hx * s, hy: e.hy * s, ..e };
-                    filter.respond(&frame(&px), &scaled, (2.0, 0.0), &mut work().0).unwrap().peak
+                    filter.respond(&frame(&px), &scaled, (2.0, 0.0), lent().lend()).unwrap().peak
                 })
                 .collect();
             let best = (0..3).max_by(|&a, &b| peaks[a].total_cmp(&peaks[b])).unwrap();
@@ -1069,7 +1060,7 @@ mod tests {
         // 6 lattice points), so the weighed answer must be another point.
         let first = texture(0.0, 0.0, WAVES);
         let mut filter = CorrelationFilter::new();
-        filter.learn(&frame(&first), &target(), (2.0, 0.05), &mut work().0);
+        filter.learn(&frame(&first), &target(), (2.0, 0.05), lent().lend());
         let other = texture(0.0, 0.0, OTHER);
         let (sx, sy) = cell(&target(), 2.0);
         let point = |r: &Response| (round(r.shift.0 / sx), round(r.shift.1 / sy));
@@ -1077,10 +1068,10 @@ mod tests {
             let w = |d: i32| 1.0 - bias * (std::f64::consts::PI * d as f64 / GRID as f64).sin().powi(2);
             w(c) * w(r)
         };
-        let far = filter.respond(&frame(&other), &target(), (2.0, 0.0), &mut work().0).unwrap();
+        let far = filter.respond(&frame(&other), &target(), (2.0, 0.0), lent().lend()).unwrap();
         let (fc, fr) = point(&far);
         assert!(fc.abs().max(fr.abs()) >= 4, "the unseen texture's highest value at {:?}", (fc, fr));
-        let near = filter.respond(&frame(&other), &target(), (2.0, 0.7), &mut work().0).unwrap();
+        let near = filter.respond(&frame(&other), &target(), (2.0, 0.7), lent().lend()).unwrap();
         let (nc, nr) = point(&near);
         assert!(near.peak <= far.peak, "{} above the highest value {}", near.peak, far.peak);
         assert!(keep(0.7, (nc, nr)) > keep(0.7, (fc, fr)), "{:?} no nearer than {:?}", (nc, nr), (fc, fr));
@@ -1095,7 +1086,7 @@ mod tests {
         // A clear match is still found where it lies, even weighed fully
         // (ground truth: the learnt texture moved by whole pixels).
         for (dx, dy) in [(3.0, -2.0), (-5.0, 4.0)] {
-            let r = filter.respond(&frame(&texture(dx, dy, WAVES)), &target(), (2.0, 1.0), &mut work().0).unwrap();
+            let r = filter.respond(&frame(&texture(dx, dy, WAVES)), &target(), (2.0, 1.0), lent().lend()).unwrap();
             assert!(
                 (r.shift.0 as f64 - dx).abs() < 1.0 && (r.shift.1 as f64 - dy).abs() < 0.75,
                 "moved by ({dx}, {dy}), found {:?}",
@@ -1110,14 +1101,14 @@ mod tests {
         // neither learns from it nor answers on it.
         let flat = vec![77u8; W * H];
         let mut filter = CorrelationFilter::new();
-        filter.learn(&frame(&flat), &target(), (2.0, 0.05), &mut work().0);
+        filter.learn(&frame(&flat), &target(), (2.0, 0.05), lent().lend());
         assert!(!filter.learned);
         let px = texture(0.0, 0.0, WAVES);
-        filter.learn(&frame(&px), &target(), (2.0, 0.05), &mut work().0);
-        assert_eq!(filter.respond(&frame(&flat), &target(), (2.0, 0.0), &mut work().0), None);
+        filter.learn(&frame(&px), &target(), (2.0, 0.05), lent().lend());
+        assert_eq!(filter.respond(&frame(&flat), &target(), (2.0, 0.0), lent().lend()), None);
         // A window partly outside the frame repeats the frame's edge
         // rather than reading out of it.
         let corner = Ellipse { cx: 2.0, cy: 3.0, hx: 20.0, hy: 20.0 };
-        assert!(filter.respond(&frame(&px), &corner, (4.0, 0.0), &mut work().0).is_some());
+        assert!(filter.respond(&frame(&px), &corner, (4.0, 0.0), lent().lend()).is_some());
     }
 }

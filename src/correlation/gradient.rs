@@ -495,10 +495,8 @@ impl GradientFilter {
         (e, cell, scale): (&Ellipse, (Real, Real), Real),
         work: &mut [u16],
     ) -> Option<Real> {
-        // A lattice one cell wider than the support, so that cell
-        // `n / 2` (which starts at the centre) is the support's middle.
-        const N: usize = SUPPORT + 1;
-        let cells = bytemuck::cast_slice_mut::<u16, u8>(work).get_mut(..CHANNELS * N * N)?;
+        const N: usize = SCALE_N;
+        let (cells, _) = super::carve::<u8, { CHANNELS * N * N }>(work)?;
         cells.fill(0);
         if !channels::read(frame, (e.cx, e.cy), (cell.0 * scale, cell.1 * scale), N, cells) {
             return None;
@@ -508,10 +506,9 @@ impl GradientFilter {
     }
 
     /// Learns the window around `e` at `rate` (the first window is learnt
-    /// whole, whatever the rate), its temporaries in `work` (nothing is
-    /// learnt in less than [`LEARNING_WORDS`] 4-byte aligned words).
+    /// whole, whatever the rate), its temporaries in `work` ([`room`]).
     fn learn(&mut self, frame: &Frame<'_>, e: &Ellipse, rate: Real, work: &mut [u16]) {
-        let Some(Room { spectrum: work, gain, cut }) = room(work) else { return };
+        let Some(Room { spectrum, gain, cut }) = room(work) else { return };
         let cell = cell_size((e.hx, e.hy));
         let lattice = match self.window.take().and_then(|w| within(w, e, cell)) {
             Some((top, left)) => Lattice { cells: &self.cells, side: READ, top, left, n: LEARN },
@@ -531,8 +528,8 @@ impl GradientFilter {
             col.fill(LAMBDA);
         }
         for k in 0..CHANNELS {
-            transform(work, lattice, &norm, k);
-            for (gain, col) in gain.iter_mut().zip(work.iter()) {
+            transform(spectrum, lattice, &norm, k);
+            for (gain, col) in gain.iter_mut().zip(spectrum.iter()) {
                 for (e, x) in gain.iter_mut().zip(col.iter()) {
                     *e += x.re * x.re + x.im * x.im;
                 }
@@ -549,12 +546,12 @@ impl GradientFilter {
         for row in cut.iter_mut() {
             row.fill(0.0);
         }
-        // The last channel transformed is still in `work`: solved first.
+        // The last channel transformed is still in `spectrum`: solved first.
         for k in (0..CHANNELS).rev().take(1).chain(0..CHANNELS - 1) {
             if k + 1 < CHANNELS {
-                transform(work, lattice, &norm, k);
+                transform(spectrum, lattice, &norm, k);
             }
-            solve(work, gain, cut);
+            solve(spectrum, gain, cut);
             if let (Some(weights), Some(sum), Some(scale)) =
                 (self.weights.get_mut(k), self.sums.get_mut(k), self.scales.get_mut(k))
             {
@@ -566,9 +563,6 @@ impl GradientFilter {
     }
 }
 
-/// 4-byte words the learning's temporaries take ([`Room`]).
-pub(crate) const LEARNING_WORDS: usize = 2 * LEARN * COLS + LEARN * COLS + SUPPORT * SUPPORT;
-
 /// The learning's temporaries: one channel's spectrum, the channels'
 /// energy sum (then the solve's gain) and one channel's cut filter.
 struct Room<'a> {
@@ -577,36 +571,50 @@ struct Room<'a> {
     cut: &'a mut Cut,
 }
 
-/// The learning's temporaries laid out in `work`, if it is 4-byte aligned
-/// and holds [`LEARNING_WORDS`] words (the tracker lends its foreground
-/// map's sums, which do: `tracker::scratch` checks the size when built).
+/// The learning's temporaries laid out in `work` (see [`super::carve`]).
 fn room(work: &mut [u16]) -> Option<Room<'_>> {
-    let words: &mut [Real] = bytemuck::try_cast_slice_mut(work.get_mut(..2 * LEARNING_WORDS)?).ok()?;
-    let (spectrum, rest) = words.split_at_mut_checked(2 * LEARN * COLS)?;
-    let (gain, cut) = rest.split_at_mut_checked(LEARN * COLS)?;
-    let spectrum: &mut [[Complex32; LEARN]] = bytemuck::try_cast_slice_mut(spectrum).ok()?;
-    let gain: &mut [[Real; LEARN]] = bytemuck::try_cast_slice_mut(gain).ok()?;
-    let cut: &mut [[Real; SUPPORT]] = bytemuck::try_cast_slice_mut(cut).ok()?;
-    Some(Room { spectrum: spectrum.try_into().ok()?, gain: gain.try_into().ok()?, cut: cut.try_into().ok()? })
+    let (spectrum, rest) = super::carve::<[Complex32; LEARN], COLS>(work)?;
+    let (gain, rest) = super::carve::<[Real; LEARN], COLS>(rest)?;
+    let (cut, _) = super::carve::<[Real; SUPPORT], SUPPORT>(rest)?;
+    Some(Room { spectrum, gain, cut })
 }
 
 /// The filter pooled 2 x 2, as the coarse search reads it.
 type PooledWeights = [[[i32; POOLED_SUPPORT]; POOLED_SUPPORT]; CHANNELS];
 
-/// 4-byte words the coarse search's temporaries take (its pooled filter,
-/// then its pooled cells, bytes).
-pub(crate) const POOLED_WORDS: usize =
-    CHANNELS * POOLED_SUPPORT * POOLED_SUPPORT + (CHANNELS * POOLED * POOLED).div_ceil(4);
+/// The coarse search's pooled cells.
+type PooledCells = [u8; CHANNELS * POOLED * POOLED];
 
-/// The coarse search's temporaries laid out in `work`, if it is 4-byte
-/// aligned and holds [`POOLED_WORDS`] words (as [`room`]).
-fn pooled_room(work: &mut [u16]) -> Option<(&mut PooledWeights, &mut [u8; CHANNELS * POOLED * POOLED])> {
-    let words: &mut [i32] = bytemuck::try_cast_slice_mut(work.get_mut(..2 * POOLED_WORDS)?).ok()?;
-    let (weights, cells) = words.split_at_mut_checked(CHANNELS * POOLED_SUPPORT * POOLED_SUPPORT)?;
+/// The coarse search's temporaries laid out in `work`: its pooled filter,
+/// then its pooled cells. Not through [`super::carve`]: carved that way,
+/// the coarse search's inner loop spills a register (about 18,000 more
+/// instructions a QVGA frame on the Cortex-M4F, `audit/profile`).
+fn pooled_room(work: &mut [u16]) -> Option<(&mut PooledWeights, &mut PooledCells)> {
+    const WEIGHTS: usize = size_of::<PooledWeights>() / 4;
+    const WORDS: usize = WEIGHTS + size_of::<PooledCells>().div_ceil(4);
+    let words: &mut [i32] = bytemuck::try_cast_slice_mut(work.get_mut(..2 * WORDS)?).ok()?;
+    let (weights, cells) = words.split_at_mut_checked(WEIGHTS)?;
     let weights: &mut [[[i32; POOLED_SUPPORT]; POOLED_SUPPORT]] = bytemuck::try_cast_slice_mut(weights).ok()?;
     let cells: &mut [u8] = bytemuck::cast_slice_mut(cells);
-    Some((weights.try_into().ok()?, cells.get_mut(..CHANNELS * POOLED * POOLED)?.try_into().ok()?))
+    Some((weights.try_into().ok()?, cells.get_mut(..size_of::<PooledCells>())?.try_into().ok()?))
 }
+
+/// A scale window's cells: a lattice one cell wider than the support, so
+/// that cell `n / 2` (which starts at the centre) is the support's middle.
+const SCALE_N: usize = SUPPORT + 1;
+type ScaleCells = [u8; CHANNELS * SCALE_N * SCALE_N];
+
+/// Bytes of lent memory the learning takes ([`Room`]).
+const LEARNING_BYTES: usize = size_of::<Spectrum>() + size_of::<Bins>() + size_of::<Cut>();
+
+/// Bytes of lent memory the filter needs at most: the learning's, the
+/// coarse search's or a scale window's (the tracker lends its foreground
+/// map's sums, which hold the largest: `tracker::scratch` checks).
+pub(crate) const WORK_BYTES: usize = {
+    let (coarse, scale) = (size_of::<PooledWeights>() + size_of::<PooledCells>(), size_of::<ScaleCells>());
+    let larger = if coarse > scale { coarse } else { scale };
+    if LEARNING_BYTES > larger { LEARNING_BYTES } else { larger }
+};
 
 /// Where the learning window about `e`, of cells `cell`, lies in the read
 /// window `(centre, cell)` this frame read (its top-left cell), if it lies
@@ -925,14 +933,7 @@ mod tests {
         Frame::packed(px, W, H, PixelFormat::Gray8).unwrap()
     }
 
-    /// Working memory as the tracker lends it: 4-byte aligned, and as
-    /// large as the learning needs.
-    #[repr(C, align(4))]
-    struct Work([u16; 2 * LEARNING_WORDS]);
-
-    fn work() -> Box<Work> {
-        Box::new(Work([0; 2 * LEARNING_WORDS]))
-    }
+    use crate::testing::lent;
 
     fn target() -> Ellipse {
         Ellipse { cx: 160.0, cy: 120.0, hx: 16.0, hy: 16.0 }
@@ -965,18 +966,18 @@ mod tests {
         // cell's share (cells are 2.5 px here), and with a clear PSR.
         let first = blocks(0, 0);
         let mut f = GradientFilter::new();
-        f.learn(&frame(&first), &target(), 1.0, &mut work().0);
+        f.learn(&frame(&first), &target(), 1.0, lent().lend());
         assert!(f.learned);
         for (dx, dy) in [(0, 0), (7, -5), (-12, 9), (20, 3)] {
             let moved = blocks(dx, dy);
-            let seen = f.look(&frame(&moved), (160.0, 120.0), (16.0, 16.0), &mut work().0).unwrap();
+            let seen = f.look(&frame(&moved), (160.0, 120.0), (16.0, 16.0), lent().lend()).unwrap();
             assert!((seen.at.0 - dx as Real).abs() < 1.5, "({dx}, {dy}): x at {:?}", seen.at);
             assert!((seen.at.1 - dy as Real).abs() < 1.5, "({dx}, {dy}): y at {:?}", seen.at);
             assert!(seen.psr > 5.0, "({dx}, {dy}): psr {}", seen.psr);
         }
         // Read about another centre: the same place in the frame.
         let moved = blocks(7, -5);
-        let seen = f.look(&frame(&moved), (150.0, 126.0), (16.0, 16.0), &mut work().0).unwrap();
+        let seen = f.look(&frame(&moved), (150.0, 126.0), (16.0, 16.0), lent().lend()).unwrap();
         assert!((150.0 + seen.at.0 - 167.0).abs() < 1.5 && (126.0 + seen.at.1 - 115.0).abs() < 1.5, "{:?}", seen.at);
     }
 
@@ -1014,12 +1015,12 @@ mod tests {
         // border's share: its orientations weigh little under the taper,
         // but the joint solve's weak regulariser passes some of them on.
         let mut fresh = GradientFilter::new();
-        fresh.learn(&frame(&px), &e, 1.0, &mut work().0);
+        fresh.learn(&frame(&px), &e, 1.0, lent().lend());
         let mut reused = GradientFilter::new();
-        reused.learn(&frame(&px), &target(), 1.0, &mut work().0);
-        assert!(reused.look(&frame(&px), (160.0, 120.0), (16.0, 16.0), &mut work().0).is_some());
+        reused.learn(&frame(&px), &target(), 1.0, lent().lend());
+        assert!(reused.look(&frame(&px), (160.0, 120.0), (16.0, 16.0), lent().lend()).is_some());
         assert!(reused.window.is_some());
-        reused.learn(&frame(&px), &e, 1.0, &mut work().0);
+        reused.learn(&frame(&px), &e, 1.0, lent().lend());
         assert!(reused.window.is_none(), "the window is used once");
         for k in 0..CHANNELS {
             let (a, b) = (&fresh.weights[k], &reused.weights[k]);
@@ -1071,12 +1072,12 @@ mod tests {
         for (px, confidence, learns) in [(&first, 0.95, false), (&turned, 0.75, false), (&turned, 0.95, true)] {
             let mut f = GradientFilter::new();
             let mut e = target();
-            f.learn(&frame(&first), &e, c.rate, &mut work().0);
+            f.learn(&frame(&first), &e, c.rate, lent().lend());
             let mut ps = [Particle::default(); 4];
-            let psr = f.place(&c, &frame(px), (&mut e, &mut ps), false, &mut work().0).unwrap();
+            let psr = f.place(&c, &frame(px), (&mut e, &mut ps), false, lent().lend()).unwrap();
             assert_eq!(psr < c.relearn_below, learns || confidence < c.relearn_above, "PSR {psr}");
             let before = f.weights;
-            f.adapt(&c, &frame(px), &e, confidence, &mut work().0);
+            f.adapt(&c, &frame(px), &e, confidence, lent().lend());
             assert_eq!(f.weights != before, learns, "confidence {confidence}, PSR {psr}");
             assert_eq!(f.waiting, if learns { 0 } else { 1 });
         }
@@ -1089,15 +1090,16 @@ mod tests {
         // memory off a 4-byte boundary, or a word short, there is no room
         // and nothing is learnt; in the tracker's lent memory (aligned,
         // large enough) there is, and the filter learns.
-        let mut w = work();
-        assert!(room(&mut w.0).is_some());
-        assert!(room(&mut w.0[1..]).is_none(), "off a 4-byte boundary");
-        assert!(room(&mut w.0[..2 * LEARNING_WORDS - 2]).is_none(), "a word short");
+        let mut map = lent();
+        let w = map.lend();
+        assert!(room(w).is_some());
+        assert!(room(&mut w[1..]).is_none(), "off a 4-byte boundary");
+        assert!(room(&mut w[..LEARNING_BYTES / 2 - 2]).is_none(), "a word short");
         let px = blocks(0, 0);
         let mut f = GradientFilter::new();
-        f.learn(&frame(&px), &target(), 1.0, &mut w.0[1..]);
+        f.learn(&frame(&px), &target(), 1.0, &mut w[1..]);
         assert!(!f.learned);
-        f.learn(&frame(&px), &target(), 1.0, &mut w.0);
+        f.learn(&frame(&px), &target(), 1.0, w);
         assert!(f.learned);
     }
 
@@ -1107,11 +1109,11 @@ mod tests {
         // (the invariant `normalise` guards).
         let flat = vec![90u8; W * H];
         let mut f = GradientFilter::new();
-        f.learn(&frame(&flat), &target(), 1.0, &mut work().0);
+        f.learn(&frame(&flat), &target(), 1.0, lent().lend());
         assert!(!f.learned);
         let first = blocks(0, 0);
-        f.learn(&frame(&first), &target(), 1.0, &mut work().0);
-        assert!(f.look(&frame(&flat), (160.0, 120.0), (16.0, 16.0), &mut work().0).is_none());
+        f.learn(&frame(&first), &target(), 1.0, lent().lend());
+        assert!(f.look(&frame(&flat), (160.0, 120.0), (16.0, 16.0), lent().lend()).is_none());
     }
 
     #[test]
@@ -1124,7 +1126,7 @@ mod tests {
         let first = blocks(0, 0);
         let moved = blocks(9, 4);
         let mut f = GradientFilter::new();
-        f.learn(&frame(&first), &target(), 1.0, &mut work().0);
+        f.learn(&frame(&first), &target(), 1.0, lent().lend());
         // Six on the target, one two boxes away, one outside the window
         // (the window is centred on their mean, (191.75, 119.25)).
         let places = [(169.0, 124.0); 6].into_iter().chain([(120.0, 90.0), (400.0, 120.0)]);
@@ -1134,7 +1136,7 @@ mod tests {
         }
         let mut sims = [0.5; 8];
         let c = GradientCue { blend: 0.3, ..GradientCue::MEASURED };
-        f.rescore(&c, &frame(&moved), (&ps, &mut sims), 8, (16.0, 16.0), &mut work().0);
+        f.rescore(&c, &frame(&moved), (&ps, &mut sims), 8, (16.0, 16.0), lent().lend());
         let kept = 0.5 * (1.0 - c.blend);
         assert!(sims[0] > kept + 0.8 * c.blend, "{sims:?}");
         assert!(sims.iter().take(6).all(|&s| s == sims[0]), "{sims:?}");

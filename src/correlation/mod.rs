@@ -18,10 +18,22 @@ use crate::error::{ConfigError, check, positive};
 use crate::scalar::Real;
 
 #[cfg(feature = "correlation")]
-pub(crate) use filter::{CorrelationFilter as Correlation, SPECTRUM_WORDS};
+pub(crate) use filter::{CorrelationFilter as Correlation, WORK_BYTES as CORRELATION_WORK_BYTES};
 
 #[cfg(feature = "gradient")]
-pub(crate) use gradient::{GradientFilter as Gradient, LEARNING_WORDS, POOLED_WORDS};
+pub(crate) use gradient::{GradientFilter as Gradient, WORK_BYTES as GRADIENT_WORK_BYTES};
+
+/// The first `[T; N]` laid out in `work` (memory the tracker lends the
+/// cues, see [`crate::foreground::ForegroundMap::lend`]) and the rest of
+/// `work` after it; `None` if `work` is too short, or not aligned for `T`.
+/// The filters' large temporaries live there rather than on the stack.
+#[cfg(feature = "correlation")]
+fn carve<T: bytemuck::Pod, const N: usize>(work: &mut [u16]) -> Option<(&mut [T; N], &mut [u16])> {
+    let size = core::mem::size_of::<[T; N]>();
+    let (front, rest) = work.split_at_mut_checked(size.div_ceil(2))?;
+    let bytes: &mut [u8] = bytemuck::cast_slice_mut(front);
+    Some((bytemuck::try_from_bytes_mut(bytes.get_mut(..size)?).ok()?, rest))
+}
 
 /// The cue in a build without the `gradient` feature.
 #[cfg(not(feature = "gradient"))]

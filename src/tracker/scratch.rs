@@ -102,10 +102,9 @@ pub(super) const FG_CELLS: usize = 4096;
 // dead (`ForegroundMap::lend`): the correlation filters' spectra, the
 // gradient filter's coarse search and its learning lie in them.
 #[cfg(feature = "correlation")]
-const _: () = assert!(2 * crate::correlation::SPECTRUM_WORDS <= FG_CELLS);
+const _: () = assert!(crate::correlation::CORRELATION_WORK_BYTES <= 2 * FG_CELLS);
 #[cfg(feature = "gradient")]
-const _: () =
-    assert!(2 * crate::correlation::LEARNING_WORDS <= FG_CELLS && 2 * crate::correlation::POOLED_WORDS <= FG_CELLS);
+const _: () = assert!(crate::correlation::GRADIENT_WORK_BYTES <= 2 * FG_CELLS);
 
 impl<const K: usize, const E: usize> Scratch<K, E> {
     /// Empty working memory.
