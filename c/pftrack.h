@@ -100,12 +100,12 @@
 
 #if defined(__LP64__)
 // 64-bit words of a [`pftrack_tracker`] on a 64-bit target.
-#define PFTRACK_TRACKER_WORDS 3091
+#define PFTRACK_TRACKER_WORDS 4633
 #endif
 
 #if !defined(__LP64__)
 // 64-bit words of a [`pftrack_tracker`] on a 32-bit target.
-#define PFTRACK_TRACKER_WORDS 3084
+#define PFTRACK_TRACKER_WORDS 4626
 #endif
 
 // Bytes of a [`pftrack_tracker`].

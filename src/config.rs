@@ -348,20 +348,49 @@ pub struct TableMode {
 }
 
 impl Default for Config {
-    /// The defaults, chosen by the ablation on the real sequences' *tune*
-    /// split and kept where the *check* split agrees (docs/accuracy.md):
-    /// the first paper's filter (RGB 8x8x8, α = 0.1, π_T = 0.15) with the
-    /// third paper's checkerboard and Sobel edge cue (8 bins, threshold
-    /// 100, lowered for a target with fewer than 10% of its pixels that
-    /// strong), a per-region budget of 500 samples, damped velocities with
-    /// wide position noise (a fifth of the target's size, or its recent
-    /// speed if that is more), σ from the particles' spread, the size (pulled
-    /// towards the first box's) and then the position (with the first grey
-    /// template's layout) searched against the surroundings, the colour
-    /// model weighted towards the target's distinctive colours (strength
-    /// 0.5 above odds 0.8), and the confidence-driven life cycle (lost
-    /// below 0.6, found and learning above 0.8).
+    /// The most accurate configuration the build has: [`Config::accurate`]
+    /// where the `gradient` feature is built (a default feature), and
+    /// [`Config::fast`] where it is not, so that a board built without it
+    /// for its RAM or frame rate gets a configuration it can run.
+    ///
+    /// ```
+    /// use pftrack::Config;
+    ///
+    /// let expected = if cfg!(feature = "gradient") { Config::accurate() } else { Config::fast() };
+    /// assert_eq!(Config::default(), expected);
+    /// ```
     fn default() -> Self {
+        if cfg!(feature = "gradient") { Config::accurate() } else { Config::fast() }
+    }
+}
+
+impl Config {
+    /// The configuration for boards that need the frame rate or the RAM:
+    /// colour with the grey-level correlation filter, no gradient filter.
+    /// Chosen by the ablation on the real sequences' *tune* split and kept
+    /// where the *check* split agrees (docs/accuracy.md): the first paper's
+    /// filter (RGB 8x8x8, α = 0.1, π_T = 0.15) with the third paper's
+    /// checkerboard and Sobel edge cue (8 bins, threshold 100, lowered for
+    /// a target with fewer than 10% of its pixels that strong), a per-region
+    /// budget of 500 samples, damped velocities with wide position noise (a
+    /// fifth of the target's size, or its recent speed if that is more), σ
+    /// from the particles' spread, the size (pulled towards the first box's)
+    /// and then the position (with the first grey template's layout)
+    /// searched against the surroundings, the colour model weighted towards
+    /// the target's distinctive colours (strength 0.5 above odds 0.8), the
+    /// grey-level filter where the `correlation` feature is built, and the
+    /// confidence-driven life cycle (lost below 0.6, found and learning
+    /// above 0.8); a lost target is looked for over the whole frame. It is
+    /// [`Config::default`] in a build without the `gradient` feature, where
+    /// the tracker is about a third smaller (docs/performance.md).
+    ///
+    /// ```
+    /// use pftrack::Config;
+    ///
+    /// assert_eq!(Config::fast().gradient, None);
+    /// assert!(Config::fast().validate().is_ok());
+    /// ```
+    pub fn fast() -> Self {
         Config {
             binning: Binning::Rgb8x8x8,
             quadrants: false,
@@ -407,27 +436,25 @@ impl Default for Config {
             background_weight: Some(BackgroundWeight { strength: 0.5, above: 0.8 }),
             template: None,
             correlation: crate::correlation::DEFAULT,
-            gradient: crate::correlation::GRADIENT_DEFAULT,
+            gradient: None,
         }
     }
-}
 
-impl Config {
-    /// The most accurate configuration measured (docs/accuracy.md): the
-    /// gradient filter ([`GradientCue::MEASURED`], the `gradient` feature)
-    /// beside the grey-level one, and 0.6 of the hypotheses observed after
-    /// a confident frame ([`Config::sure_share`]), which pays for part of
-    /// the filter. The grey-level filter takes its response's highest value
-    /// wherever it lies ([`CorrelationCue::centre_bias`] 0): beside the
-    /// gradient filter the bias lost on the check split. A lost target is
-    /// looked for about where it was last found, the square widening by
-    /// 0.05 of its half axes a frame ([`LostSearch::Widening`]): fewer
-    /// frames miss the target, and the confidence ranks those that still
-    /// do less well than with the whole frame's search, which the default
-    /// keeps (docs/accuracy.md). It takes about
-    /// half as much RAM again as the default and more instructions a frame
-    /// (docs/performance.md); a build without the `gradient` feature
-    /// refuses it by name, as it refuses the filter.
+    /// The most accurate configuration measured, and the default
+    /// (docs/accuracy.md): [`Config::fast`] with the gradient filter
+    /// ([`GradientCue::MEASURED`], the `gradient` feature) beside the
+    /// grey-level one, and 0.6 of the hypotheses observed after a confident
+    /// frame ([`Config::sure_share`]), which pays for part of the filter.
+    /// The grey-level filter takes its response's highest value wherever it
+    /// lies ([`CorrelationCue::centre_bias`] 0): beside the gradient filter
+    /// the bias lost on the check split. A lost target is looked for about
+    /// where it was last found, the square widening by 0.05 of its half
+    /// axes a frame ([`LostSearch::Widening`]): fewer frames miss the
+    /// target. It takes about half as much RAM again as [`Config::fast`]
+    /// (the gradient filter's memory is in every tracker of a build with
+    /// the feature) and more instructions a frame (docs/performance.md); a
+    /// build without the `gradient` feature refuses it by name, as it
+    /// refuses the filter.
     ///
     /// ```
     /// use pftrack::{Config, ConfigError, Error, ParamProblem, Tracker};
@@ -447,7 +474,7 @@ impl Config {
             sure_share: 0.6,
             correlation,
             lost_search: LostSearch::Widening { growth: 0.05 },
-            ..Config::default()
+            ..Config::fast()
         }
     }
 

@@ -46,16 +46,15 @@ pub(crate) trait Cue {
 
     /// Looks at the frame around the filter's mean state before the size
     /// and position searches, and may move the estimate and its particles
-    /// with it (`search` false: the size is decided elsewhere this frame;
-    /// `work` as for [`Cue::start`]). Returns the peak-to-sidelobe ratio of
-    /// its response, if it has one.
+    /// with it, as far as `freedom` lets it (`work` as for [`Cue::start`]).
+    /// Returns the peak-to-sidelobe ratio of its response, if it has one.
     #[allow(unused_variables)]
     fn place<const N: usize>(
         &mut self,
         settings: &Self::Settings,
         frame: &Frame<'_>,
         estimate: (&mut Ellipse, &mut [Particle; N]),
-        search: bool,
+        freedom: Freedom,
         work: &mut [u16],
     ) -> Option<Real> {
         None
@@ -73,6 +72,32 @@ pub(crate) trait Cue {
     /// (`work` as for [`Cue::start`]).
     #[allow(unused_variables)]
     fn adapt(&mut self, settings: &Self::Settings, frame: &Frame<'_>, e: &Ellipse, confidence: Real, work: &mut [u16]) {
+    }
+}
+
+/// What [`Cue::place`] may change of the estimate.
+#[derive(Copy, Clone, Debug, PartialEq, Eq)]
+pub(crate) enum Freedom {
+    /// Its position and its size.
+    Full,
+    /// Its position: the size is decided elsewhere this frame.
+    Position,
+    /// Nothing: another target of a group is near, and a layout cue finds
+    /// a look-alike neighbour's layout as well as the target's own, so
+    /// only the colour hypotheses, which the group keeps apart, place the
+    /// target there. The cue still measures its response.
+    Held,
+}
+
+impl Freedom {
+    /// Whether the cue may move the estimate.
+    pub(crate) fn moves(self) -> bool {
+        self != Freedom::Held
+    }
+
+    /// Whether the cue may size the estimate.
+    pub(crate) fn sizes(self) -> bool {
+        self == Freedom::Full
     }
 }
 

@@ -98,10 +98,10 @@ pub const PFTRACK_EVENT_REACQUIRED: u32 = 4;
 
 /// 64-bit words of a [`pftrack_tracker`] on a 64-bit target.
 #[cfg(target_pointer_width = "64")]
-pub const PFTRACK_TRACKER_WORDS: usize = 3091;
+pub const PFTRACK_TRACKER_WORDS: usize = 4633;
 /// 64-bit words of a [`pftrack_tracker`] on a 32-bit target.
 #[cfg(not(target_pointer_width = "64"))]
-pub const PFTRACK_TRACKER_WORDS: usize = 3084;
+pub const PFTRACK_TRACKER_WORDS: usize = 4626;
 /// Bytes of a [`pftrack_tracker`].
 pub const PFTRACK_TRACKER_BYTES: usize = PFTRACK_TRACKER_WORDS * 8;
 /// Alignment of a [`pftrack_tracker`], in bytes.

@@ -129,7 +129,7 @@ pub fn run(
 #[cfg(feature = "group")]
 #[inline(never)]
 fn make_group(seed: u64, sure_share: pftrack::Real) -> Result<Option<&'static mut FwGroup>, pftrack::Error> {
-    let g = FwGroup::new(Config { sure_share, ..Config::default() }, seed)?;
+    let g = FwGroup::new(Config { sure_share, ..Config::fast() }, seed)?;
     Ok(cortex_m::singleton!(: FwGroup = g))
 }
 

@@ -229,9 +229,10 @@ fn start_systick(cp: &mut cortex_m::Peripherals) {
 /// before the tracking loop whose stack is measured.
 #[inline(never)]
 fn make_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
-    // The default configuration: with the correlation filter where the
-    // build has it (the default), the colour cues alone where it does not.
-    let t = FwTracker::new(Config::default(), seed)?;
+    // The configuration for boards that need the frame rate: with the
+    // correlation filter where the build has it (the default), the colour
+    // cues alone where it does not.
+    let t = FwTracker::new(Config::fast(), seed)?;
     Ok(cortex_m::singleton!(: FwTracker = t))
 }
 
@@ -242,7 +243,7 @@ fn make_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Er
 #[cfg(feature = "all-options")]
 #[inline(never)]
 fn make_still_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
-    let t = FwTracker::new(Config { scene_motion: false, ..Config::default() }, seed)?;
+    let t = FwTracker::new(Config { scene_motion: false, ..Config::fast() }, seed)?;
     Ok(cortex_m::singleton!(: FwTracker = t))
 }
 
@@ -252,7 +253,7 @@ fn make_still_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftra
 #[cfg(feature = "all-options")]
 #[inline(never)]
 fn make_sure_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
-    let t = FwTracker::new(Config { sure_share: SURE_SHARE, ..Config::default() }, seed)?;
+    let t = FwTracker::new(Config { sure_share: SURE_SHARE, ..Config::fast() }, seed)?;
     Ok(cortex_m::singleton!(: FwTracker = t))
 }
 
@@ -262,7 +263,7 @@ fn make_sure_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrac
 #[cfg(feature = "gradient")]
 #[inline(never)]
 fn make_gradient_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
-    let config = Config { gradient: Some(pftrack::GradientCue::MEASURED), correlation: None, ..Config::default() };
+    let config = Config { gradient: Some(pftrack::GradientCue::MEASURED), correlation: None, ..Config::fast() };
     let t = FwTracker::new(config, seed)?;
     Ok(cortex_m::singleton!(: FwTracker = t))
 }

@@ -29,12 +29,13 @@ const fn key(name: &'static str, help: &'static str, parse: Parse) -> Key {
 pub const KEYS: &[Key] = &[
     key(
         "config",
-        "default | accurate (the whole configuration, which the settings after it change: Config::default, or Config::accurate, both filters; accurate needs the gradient feature)",
+        "default | accurate | fast (the whole configuration, which the settings after it change: Config::default, which is Config::accurate, both filters; or Config::fast, the grey-level filter alone)",
         |c, k, v| {
             *c = match v {
                 "default" => Config::default(),
                 "accurate" => Config::accurate(),
-                _ => return Err(format!("{k}: `{v}` is not default or accurate")),
+                "fast" => Config::fast(),
+                _ => return Err(format!("{k}: `{v}` is not default, accurate or fast")),
             };
             Ok(())
         },
@@ -476,11 +477,11 @@ mod tests {
                 "shift" => "0.1:2:1:0.5",
                 "life" => "appearance",
                 "redetect" => "frame",
-                "lost_search" => "widening:0.05",
+                "lost_search" => "frame",
                 "scene_motion" => "off",
                 "correlation" => "off",
-                "gradient" => "on",
-                "config" => "accurate",
+                "gradient" => "off",
+                "config" => "fast",
                 "background_weight" => "1",
                 "template" => "0.3:0.05",
                 _ => "0.07",

@@ -36,7 +36,7 @@
 //! memory, used or not.
 
 use super::CorrelationCue;
-use crate::cue::Cue;
+use crate::cue::{Cue, Freedom};
 use crate::filter::{Particle, scale_estimate, shift_estimate};
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
@@ -739,25 +739,25 @@ impl Cue for CorrelationFilter {
         c: &CorrelationCue,
         frame: &Frame<'_>,
         (ellipse, particles): (&mut Ellipse, &mut [Particle; N]),
-        search: bool,
+        freedom: Freedom,
         work: &mut [u16],
     ) -> Option<Real> {
         let response = self.respond(frame, ellipse, (c.padding, c.centre_bias), work)?;
         // A response with no clear peak says nothing of where the target
         // went, nor of its size.
-        let sure = response.psr >= c.min_psr;
+        let moves = response.psr >= c.min_psr && freedom.moves();
         let before = (ellipse.cx, ellipse.cy);
-        if sure {
+        if moves {
             let (dx, dy) = (c.pull * response.shift.0, c.pull * response.shift.1);
             shift_estimate(ellipse, particles, (dx, dy), frame);
         }
         // The scale: windows one step larger and smaller about the new
         // centre, against the first response, whose peak is already the
         // best match at the present size wherever it lay in the window.
-        // Not where the size is decided outside (`search` false).
+        // Not where the size is decided outside.
         // Each larger or smaller window is read at the shift where the
         // first one's peak now lies (what the pull left of it), not searched.
-        if sure && c.scale_step > 0.0 && search {
+        if moves && c.scale_step > 0.0 && freedom.sizes() {
             let left = (response.shift.0 - (ellipse.cx - before.0), response.shift.1 - (ellipse.cy - before.1));
             let mut best = (response.peak, 1.0);
             for s in [1.0 + c.scale_step, 1.0 / (1.0 + c.scale_step)] {

@@ -38,7 +38,7 @@
 use super::GradientCue;
 use super::channels::{self, CHANNELS, MAX_CELLS};
 use super::filter::{peak, round, sin, sub_cell, taper};
-use crate::cue::Cue;
+use crate::cue::{Cue, Freedom};
 use crate::filter::{Particle, scale_estimate, shift_estimate};
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
@@ -854,7 +854,7 @@ impl Cue for GradientFilter {
         c: &GradientCue,
         frame: &Frame<'_>,
         (ellipse, particles): (&mut Ellipse, &mut [Particle; N]),
-        search: bool,
+        freedom: Freedom,
         work: &mut [u16],
     ) -> Option<Real> {
         // The window about the estimate, where the search for the peak
@@ -862,11 +862,11 @@ impl Cue for GradientFilter {
         // estimate is measured the better centre, docs/accuracy.md).
         let seen = self.look(frame, (ellipse.cx, ellipse.cy), (ellipse.hx, ellipse.hy), work)?;
         self.unlike = seen.psr < c.relearn_below;
-        if seen.psr >= c.min_psr {
+        if seen.psr >= c.min_psr && freedom.moves() {
             let (x, y) = (seen.centre.0 + seen.at.0, seen.centre.1 + seen.at.1);
             let (dx, dy) = (c.pull * (x - ellipse.cx), c.pull * (y - ellipse.cy));
             shift_estimate(ellipse, particles, (dx, dy), frame);
-            if c.scale_step > 0.0 && search {
+            if c.scale_step > 0.0 && freedom.sizes() {
                 let mut best = None;
                 for s in [1.0, 1.0 + c.scale_step, 1.0 / (1.0 + c.scale_step)] {
                     if let Some(r) = self.at_scale(frame, (ellipse, seen.cell, s), work)
@@ -1074,13 +1074,40 @@ mod tests {
             let mut e = target();
             f.learn(&frame(&first), &e, c.rate, lent().lend());
             let mut ps = [Particle::default(); 4];
-            let psr = f.place(&c, &frame(px), (&mut e, &mut ps), false, lent().lend()).unwrap();
+            let psr = f.place(&c, &frame(px), (&mut e, &mut ps), Freedom::Position, lent().lend()).unwrap();
             assert_eq!(psr < c.relearn_below, learns || confidence < c.relearn_above, "PSR {psr}");
             let before = f.weights;
             f.adapt(&c, &frame(px), &e, confidence, lent().lend());
             assert_eq!(f.weights != before, learns, "confidence {confidence}, PSR {psr}");
             assert_eq!(f.waiting, if learns { 0 } else { 1 });
         }
+    }
+
+    #[test]
+    fn a_held_estimate_is_measured_but_not_moved() {
+        // Reason: the rule of `Freedom::Held` by construction. The learnt
+        // texture moved 4 px right and 3 px down answers with a clear peak
+        // there: free, the filter pulls the box towards it; held (a group's
+        // neighbour near), it leaves the box and the particles where they
+        // were, and reports the same response.
+        let c = GradientCue::MEASURED;
+        let mut f = GradientFilter::new();
+        f.learn(&frame(&blocks(0, 0)), &target(), c.rate, lent().lend());
+        let px = blocks(4, 3);
+        let moved = frame(&px);
+        let mut psrs = [0.0; 2];
+        for (i, freedom) in [Freedom::Position, Freedom::Held].into_iter().enumerate() {
+            let (mut e, start) = (target(), target());
+            let mut ps = [Particle::default(); 4];
+            psrs[i] = f.place(&c, &moved, (&mut e, &mut ps), freedom, lent().lend()).unwrap();
+            assert!(psrs[i] >= c.min_psr, "{freedom:?}: PSR {}", psrs[i]);
+            if freedom.moves() {
+                assert!(e.cx - start.cx > 2.0 && e.cy - start.cy > 1.5, "{e:?}");
+            } else {
+                assert_eq!((e, ps), (start, [Particle::default(); 4]));
+            }
+        }
+        assert_eq!(psrs[0], psrs[1]);
     }
 
     #[test]

@@ -160,10 +160,6 @@ impl CorrelationCue {
     };
 }
 
-/// The gradient filter's default: off (the grey-level filter is the
-/// default's texture cue; see [`GradientCue`] for what it costs).
-pub(crate) const GRADIENT_DEFAULT: Option<GradientCue> = None;
-
 /// Checks the gradient filter's settings; asking for it in a build without
 /// it is an error that names the feature.
 // Inlined into `Config::validate`, the one caller, as its other checks are.

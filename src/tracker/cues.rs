@@ -2,7 +2,7 @@
 //! by its module (see [`crate::cue`]) and one line in [`cues!`]'s list.
 
 use crate::config::Config;
-use crate::cue::Cue;
+use crate::cue::{Cue, Freedom};
 use crate::filter::Particle;
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
@@ -51,12 +51,12 @@ macro_rules! cues {
                 cfg: &Config,
                 frame: &Frame<'_>,
                 (ellipse, particles): (&mut Ellipse, &mut [Particle; N]),
-                search: bool,
+                freedom: Freedom,
                 work: &mut [u16],
             ) -> Real {
                 let mut psr = 0.0;
                 $(if let Some(s) = ($settings)(cfg)
-                    && let Some(p) = Cue::place(&mut self.$name, &s, frame, (&mut *ellipse, &mut *particles), search, work)
+                    && let Some(p) = Cue::place(&mut self.$name, &s, frame, (&mut *ellipse, &mut *particles), freedom, work)
                 {
                     psr = p;
                 })*

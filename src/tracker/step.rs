@@ -6,6 +6,7 @@ use super::search::*;
 use super::{ScalePrior, Track, Tracker};
 use crate::apart::{Alone, Apart};
 use crate::config::{Life, LostSearch, ModelUpdate, Redetect};
+use crate::cue::Freedom;
 use crate::error::Error;
 use crate::estimate::{Diagnostics, Estimate, Event, TrackState};
 use crate::filter::{Bounds, Particle, mean_state, resample, scale_estimate, shift_estimate};
@@ -52,7 +53,9 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         if size != target.frame {
             return Err(Error::FrameSizeChanged { expected: target.frame, got: size });
         }
-        let n = self.hypotheses(&apart);
+        // Identities are at stake where another target is near.
+        let near = self.held().is_some_and(|mine| apart.near(&mine));
+        let n = self.hypotheses(near);
         self.predict(scratch, frame, prior, n);
         let observed = self.observe(scratch, frame, apart, n);
         if let Some(t) = self.target.as_ref() {
@@ -66,7 +69,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         // An external size measurement, or the table's fixed size, decides
         // the size: no search then.
         let sized = prior.is_some() || (T > 0 && self.config.table.is_some());
-        let look = self.estimate(scratch, frame, &observed, !sized, n);
+        let look = self.estimate(scratch, frame, &observed, (!sized, near), n);
         // Measured on every frame, so that its running means stay current.
         let stuck = self.cues.miss(&self.config, frame, &look.ellipse, self.state == TrackState::Tracking);
         let was_tracking = self.state == TrackState::Tracking;
@@ -279,9 +282,9 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
     /// How many hypotheses this step draws and observes: a share of them
     /// after a frame confidently on the target ([`crate::Config::sure_share`];
     /// the last confidence is recomputed from its signals, which the
-    /// tracker keeps), unless `apart` has another target near; all of them
+    /// tracker keeps), unless another target is `near`; all of them
     /// otherwise.
-    fn hypotheses<A: Apart>(&self, apart: &A) -> usize {
+    fn hypotheses(&self, near: bool) -> usize {
         let cfg = &self.config;
         let Life::Confidence { found_above, .. } = cfg.life else { return N };
         if !(cfg.sure_share < 1.0) || self.state != TrackState::Tracking {
@@ -289,20 +292,22 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         }
         let d = &self.diag;
         let sure = on_target(d.contrast, d.correlation, d.anchored) > found_above;
-        if !sure || self.held().is_some_and(|mine| apart.near(&mine)) {
+        if !sure || near {
             return N;
         }
         ((cfg.sure_share * N as Real) as usize).clamp(2, N)
     }
 
-    /// The weighted mean state, sized against the surroundings, and how it
-    /// compares with the models.
+    /// The weighted mean state, sized against the surroundings (unless
+    /// `search` is false: the size is decided elsewhere this frame), and how
+    /// it compares with the models; `near` when another target of a group
+    /// is near (see [`Freedom::Held`]).
     pub(super) fn estimate<const E: usize>(
         &mut self,
         scratch: &mut Scratch<K, E>,
         frame: &Frame<'_>,
         observed: &Observed,
-        search: bool,
+        (search, near): (bool, bool),
         n: usize,
     ) -> Look {
         let Track { config: cfg, particles, weights, target, state, diag, cues, .. } = self;
@@ -311,7 +316,12 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
             mean_state(particles.get(..n).unwrap_or(particles), weights.get(..n).unwrap_or(weights)).ellipse();
         // The texture cue first, so that the searches and the confidence
         // measure the box where it leaves it.
-        let psr = cues.place(cfg, frame, (&mut ellipse, particles), search, scratch.fgmap.lend());
+        let freedom = match (near, search) {
+            (true, _) => Freedom::Held,
+            (false, true) => Freedom::Full,
+            (false, false) => Freedom::Position,
+        };
+        let psr = cues.place(cfg, frame, (&mut ellipse, particles), freedom, scratch.fgmap.lend());
         let Some(target) = target.as_ref() else {
             return Look { ellipse, confidence: 0.0, similarity: 0.0, found: false, occluded_quadrant: None };
         };

@@ -254,7 +254,7 @@ fn the_correlation_filter_follows_a_texture_colour_cannot_place() {
     // layout of light and dark and places the box within 2 px (half of
     // its window's 4-px cells, after the sub-cell fit).
     let scene = panning_texture();
-    let cfg = Config { edges: None, correlation: Some(CorrelationCue::MEASURED), ..Config::default() };
+    let cfg = Config { edges: None, correlation: Some(CorrelationCue::MEASURED), ..Config::fast() };
     let mut t: Tracker<60> = Tracker::new(cfg, 1).unwrap();
     t.init(&frame(&scene(0)), BOX).unwrap();
     for k in 1..=10 {

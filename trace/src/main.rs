@@ -5,7 +5,8 @@
 //! ARMv6 Linux device (see the README).
 //!
 //! Usage: pftrack-trace FIXTURE [SEED [pf|pf-sure|colour|meanshift|kalman|pf-gradient|pf-accurate]]
-//! (`pf-gradient` and `pf-accurate` in a build with the `gradient` feature)
+//! (`pf`: `Config::fast`, as the firmware's default build runs it;
+//! `pf-accurate`: `Config::accurate`, the core's default)
 //!
 //! A fixture of several targets is tracked by a group of them all (the
 //! particle filter; mean shift follows one target), one line per target
@@ -16,7 +17,7 @@ use pftrack_fixture::{HEADER_LEN, Header, RECORD_META_LEN, RecordMeta};
 use std::io::{Read, Write};
 use std::process::ExitCode;
 
-/// The firmware's tracker type (firmware/src/main.rs): the defaults.
+/// The firmware's tracker type (firmware/src/main.rs).
 type FwTracker = Tracker<100>;
 
 /// The firmware's group type, for fixtures of several targets.
@@ -25,7 +26,7 @@ type FwGroup = Group<3, 100>;
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some(path) = args.first() else {
-        eprintln!("usage: pftrack-trace FIXTURE [SEED [pf|pf-sure|colour|meanshift|kalman]]");
+        eprintln!("usage: pftrack-trace FIXTURE [SEED [pf|pf-sure|colour|meanshift|kalman|pf-gradient|pf-accurate]]");
         return ExitCode::FAILURE;
     };
     let seed = match args.get(1).map(|s| s.parse::<u64>()) {
@@ -54,28 +55,27 @@ fn run(path: &str, seed: u64, kind: &str) -> Result<(), String> {
     let h = Header::parse(&head).map_err(|e| e.to_string())?;
     let ms_config = match kind {
         "pf" | "pf-sure" | "colour" => None,
-        #[cfg(feature = "gradient")]
         "pf-gradient" | "pf-accurate" => None,
         "meanshift" => Some(MeanShiftConfig::default()),
         "kalman" => Some(MeanShiftConfig::kalman()),
-        _ => return Err(format!("tracker `{kind}` is not pf, pf-sure, colour, meanshift or kalman")),
+        _ => {
+            return Err(format!(
+                "tracker `{kind}` is not pf, pf-sure, colour, meanshift, kalman, pf-gradient or pf-accurate"
+            ));
+        }
     };
     // `colour`: the particle filter without the correlation filter, as the
     // firmware built without its `correlation` feature runs it; `pf-sure`:
     // a share of the hypotheses after a confident frame, as the firmware's
     // `pf-sure` tracker and group observe.
     let config = match kind {
-        "colour" => Config { correlation: None, ..Config::default() },
-        "pf-sure" => Config { sure_share: 0.6, ..Config::default() },
+        "colour" => Config { correlation: None, ..Config::fast() },
+        "pf-sure" => Config { sure_share: 0.6, ..Config::fast() },
         // As the firmware's `pf-gradient` tracker (its `gradient` feature).
-        #[cfg(feature = "gradient")]
-        "pf-gradient" => {
-            Config { gradient: Some(pftrack::GradientCue::MEASURED), correlation: None, ..Config::default() }
-        }
+        "pf-gradient" => Config { gradient: Some(pftrack::GradientCue::MEASURED), correlation: None, ..Config::fast() },
         // As the firmware's `pf-accurate` tracker.
-        #[cfg(feature = "gradient")]
         "pf-accurate" => Config::accurate(),
-        _ => Config::default(),
+        _ => Config::fast(),
     };
     if h.targets > 1 {
         if ms_config.is_some() {
