@@ -89,6 +89,8 @@ pub(crate) enum Freedom {
     Held,
 }
 
+// Read only by the correlation filters.
+#[cfg_attr(not(feature = "correlation"), allow(dead_code))]
 impl Freedom {
     /// Whether the cue may move the estimate.
     pub(crate) fn moves(self) -> bool {
