@@ -10,8 +10,10 @@
 //! cue, likelihood table, scale prior, surroundings-motion test, correlation
 //! filter), and the mean-shift baselines and a group of targets (added,
 //! stepped, re-initialised and removed) run too;
-//! CI links it with and without `--features all-options`, and without the
-//! default `correlation` feature, so the proof covers every build's code.
+//! CI links it with and without `--features all-options`, with `gradient`
+//! (the core's default features, where the default is `Config::accurate`),
+//! and without the default `correlation` feature, so the proof covers every
+//! build's code.
 #![no_std]
 #![no_main]
 
