@@ -61,6 +61,16 @@
 // Semi-planar YUV 4:2:0: Y plane, then interleaved U, V, in one buffer.
 #define PFTRACK_FORMAT_NV12 6
 
+// `pftrack_config.base`: the other fields apply over the default
+// configuration (both correlation filters, a lost target looked for where
+// it was lost: the most accurate).
+#define PFTRACK_BASE_DEFAULT 0
+
+// `pftrack_config.base`: the other fields apply over the configuration for
+// boards that need the frame rate (the grey-level correlation filter
+// alone, a lost target looked for over the frame).
+#define PFTRACK_BASE_FAST 1
+
 // `pftrack_config.redetect`: a missed target is looked for only where the
 // particles go.
 #define PFTRACK_REDETECT_OFF 0
@@ -114,9 +124,13 @@
 // Alignment of a [`pftrack_tracker`], in bytes.
 #define PFTRACK_TRACKER_ALIGN 8
 
-// The settings a C caller sets; the rest are the Rust defaults. Fill it
-// with [`pftrack_config_default`], then change fields.
+// The settings a C caller sets; the rest are those of the configuration
+// `base` names. Fill it with [`pftrack_config_default`] or
+// [`pftrack_config_fast`], then change fields.
 typedef struct {
+  // The configuration the other fields apply over: `PFTRACK_BASE_DEFAULT`
+  // or `PFTRACK_BASE_FAST`.
+  uint8_t base;
   // A tracking frame whose confidence is below this is a miss, in `[0, 1]`.
   float lost_below;
   // A searched-for or lost target is found above this, in `[0, 1]`.
@@ -125,7 +139,7 @@ typedef struct {
   float alpha;
   // Consecutive misses after which a tracked target is lost (1 to 1000).
   uint16_t lost_after;
-  // 1: the correlation filter beside colour; 0: colour cues alone.
+  // 1: the grey-level correlation filter beside colour; 0: without it.
   uint8_t correlation;
   // 1: a box that moves with its surroundings counts as a miss; 0: off.
   uint8_t scene_motion;
@@ -194,11 +208,18 @@ typedef struct {
 extern "C" {
 #endif // __cplusplus
 
-// Fills `out` with the default settings.
+// Fills `out` with the default settings (`Config::default()`).
 //
 // # Safety
 // `out` is null or points to a writable `pftrack_config`.
 int32_t pftrack_config_default(pftrack_config *out);
+
+// Fills `out` with the settings for boards that need the frame rate
+// (`Config::fast()`).
+//
+// # Safety
+// `out` is null or points to a writable `pftrack_config`.
+int32_t pftrack_config_fast(pftrack_config *out);
 
 // Makes a tracker in `t` with settings `config` and random seed `seed`
 // (the same seed and frames give the same track, bit for bit, on every

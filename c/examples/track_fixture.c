@@ -3,7 +3,10 @@
  * given; numbers with nine significant digits, which read back as the same
  * float).
  *
- *   track_fixture FIXTURE [SEED]
+ *   track_fixture FIXTURE [SEED [fast]]
+ *
+ * (`fast`: the configuration for boards that need the frame rate, as
+ * `track run --set config=fast`.)
  *
  * The fixture format is in docs/fixtures.md: a 32-byte header, then records
  * of a ground-truth box (4 little-endian floats), 4 bytes, and the frame.
@@ -60,11 +63,11 @@ static int fail(const char *what, int code) {
 }
 
 int main(int argc, char **argv) {
-    if (argc < 2 || argc > 3) {
-        fprintf(stderr, "usage: %s FIXTURE [SEED]\n", argv[0]);
+    if (argc < 2 || argc > 4 || (argc == 4 && strcmp(argv[3], "fast") != 0)) {
+        fprintf(stderr, "usage: %s FIXTURE [SEED [fast]]\n", argv[0]);
         return 2;
     }
-    uint64_t seed = argc == 3 ? strtoull(argv[2], NULL, 10) : 1;
+    uint64_t seed = argc >= 3 ? strtoull(argv[2], NULL, 10) : 1;
     FILE *f = fopen(argv[1], "rb");
     uint8_t header[32];
     if (!f || fread(header, 1, sizeof header, f) != sizeof header || memcmp(header, "PFTRKFX1", 8) != 0) {
@@ -83,7 +86,8 @@ int main(int argc, char **argv) {
     if (!record) return 1;
 
     pftrack_config config;
-    pftrack_config_default(&config);
+    if (argc == 4) pftrack_config_fast(&config);
+    else pftrack_config_default(&config);
     int code = pftrack_create(&tracker, sizeof tracker, &config, seed);
     if (code != PFTRACK_OK) return fail("create", code);
 

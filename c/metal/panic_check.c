@@ -13,7 +13,9 @@ static volatile float sink;
 int firmware_main(int argc, char **argv) {
     (void)argv;
     pftrack_config config;
-    pftrack_config_default(&config);
+    if (input[15] & 1) pftrack_config_fast(&config);
+    else pftrack_config_default(&config);
+    config.base = input[16];
     config.lost_below = input[0] / 255.0f;
     config.correlation = input[1];
     pftrack_create(&tracker, argc > 0 ? sizeof tracker : (size_t)input[2], &config, input[3]);

@@ -67,6 +67,15 @@ pub const PFTRACK_FORMAT_I420: u32 = 5;
 /// Semi-planar YUV 4:2:0: Y plane, then interleaved U, V, in one buffer.
 pub const PFTRACK_FORMAT_NV12: u32 = 6;
 
+/// `pftrack_config.base`: the other fields apply over the default
+/// configuration (both correlation filters, a lost target looked for where
+/// it was lost: the most accurate).
+pub const PFTRACK_BASE_DEFAULT: u8 = 0;
+/// `pftrack_config.base`: the other fields apply over the configuration for
+/// boards that need the frame rate (the grey-level correlation filter
+/// alone, a lost target looked for over the frame).
+pub const PFTRACK_BASE_FAST: u8 = 1;
+
 /// `pftrack_config.redetect`: a missed target is looked for only where the
 /// particles go.
 pub const PFTRACK_REDETECT_OFF: u8 = 0;
@@ -165,11 +174,15 @@ pub struct pftrack_estimate {
     pub event: u32,
 }
 
-/// The settings a C caller sets; the rest are the Rust defaults. Fill it
-/// with [`pftrack_config_default`], then change fields.
+/// The settings a C caller sets; the rest are those of the configuration
+/// `base` names. Fill it with [`pftrack_config_default`] or
+/// [`pftrack_config_fast`], then change fields.
 #[repr(C)]
 #[derive(Copy, Clone, Debug, PartialEq)]
 pub struct pftrack_config {
+    /// The configuration the other fields apply over: `PFTRACK_BASE_DEFAULT`
+    /// or `PFTRACK_BASE_FAST`.
+    pub base: u8,
     /// A tracking frame whose confidence is below this is a miss, in `[0, 1]`.
     pub lost_below: f32,
     /// A searched-for or lost target is found above this, in `[0, 1]`.
@@ -178,7 +191,7 @@ pub struct pftrack_config {
     pub alpha: f32,
     /// Consecutive misses after which a tracked target is lost (1 to 1000).
     pub lost_after: u16,
-    /// 1: the correlation filter beside colour; 0: colour cues alone.
+    /// 1: the grey-level correlation filter beside colour; 0: without it.
     pub correlation: u8,
     /// 1: a box that moves with its surroundings counts as a miss; 0: off.
     pub scene_motion: u8,
@@ -310,7 +323,7 @@ fn config_of(c: &pftrack_config) -> Result<Config, Error> {
         1 => Ok(true),
         _ => Err(out_of_range(field)),
     };
-    let defaults = Config::default();
+    let defaults = base_of(c.base).ok_or_else(|| out_of_range("base"))?;
     Ok(Config {
         life: Life::Confidence { lost_below: c.lost_below, found_above: c.found_above },
         alpha: c.alpha,
@@ -329,21 +342,51 @@ fn config_of(c: &pftrack_config) -> Result<Config, Error> {
     })
 }
 
-/// Fills `out` with the default settings.
+/// The configuration `base` names, if it names one.
+fn base_of(base: u8) -> Option<Config> {
+    match base {
+        PFTRACK_BASE_DEFAULT => Some(Config::default()),
+        PFTRACK_BASE_FAST => Some(Config::fast()),
+        _ => None,
+    }
+}
+
+/// Fills `out` with the default settings (`Config::default()`).
 ///
 /// # Safety
 /// `out` is null or points to a writable `pftrack_config`.
 #[unsafe(no_mangle)]
 pub unsafe extern "C" fn pftrack_config_default(out: *mut pftrack_config) -> i32 {
+    // SAFETY: the caller's promise, passed on.
+    unsafe { fill(out, PFTRACK_BASE_DEFAULT) }
+}
+
+/// Fills `out` with the settings for boards that need the frame rate
+/// (`Config::fast()`).
+///
+/// # Safety
+/// `out` is null or points to a writable `pftrack_config`.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn pftrack_config_fast(out: *mut pftrack_config) -> i32 {
+    // SAFETY: the caller's promise, passed on.
+    unsafe { fill(out, PFTRACK_BASE_FAST) }
+}
+
+/// Fills `out` with the settings of the configuration `base` names.
+///
+/// # Safety
+/// `out` is null or points to a writable `pftrack_config`.
+unsafe fn fill(out: *mut pftrack_config, base: u8) -> i32 {
     if out.is_null() {
         return PFTRACK_ERR_NULL;
     }
-    let d = Config::default();
+    let Some(d) = base_of(base) else { return PFTRACK_ERR_CONFIG };
     let (lost_below, found_above) = match d.life {
         Life::Confidence { lost_below, found_above } => (lost_below, found_above),
         Life::Appearance => (0.6, 0.8),
     };
     let c = pftrack_config {
+        base,
         lost_below,
         found_above,
         alpha: d.alpha,
@@ -606,6 +649,7 @@ mod tests {
 
     fn defaults() -> pftrack_config {
         let mut c = pftrack_config {
+            base: 9,
             lost_below: 0.0,
             found_above: 0.0,
             alpha: 0.0,
@@ -631,9 +675,17 @@ mod tests {
 
     #[test]
     fn defaults_are_the_rust_defaults() {
-        // Reason: a C caller who changes nothing gets `Config::default()`.
-        let c = defaults();
+        // Reason: a C caller who changes nothing gets `Config::default()`,
+        // or `Config::fast()` from `pftrack_config_fast`; a base that is
+        // neither is an error naming the field.
+        let mut c = defaults();
         assert_eq!(config_of(&c), Ok(Config::default()));
+        // SAFETY: a writable config.
+        assert_eq!(unsafe { pftrack_config_fast(&mut c) }, PFTRACK_OK);
+        assert_eq!(config_of(&c), Ok(Config::fast()));
+        assert_ne!(Config::fast(), Config::default());
+        c.base = 2;
+        assert_eq!(config_of(&c), Err(out_of_range("base")));
     }
 
     #[test]

@@ -4,15 +4,16 @@ video; a summary of each tracker's ms per frame (and, with ground truth,
 its success AUC) at the end.
 
     python python/examples/side_by_side.py INPUT BOX|--truth \\
-        [--nanotrack DIR] [--frames N] [--out side_by_side.mp4] [--config accurate]
+        [--nanotrack DIR] [--frames N] [--out side_by_side.mp4] [--config fast]
 
 INPUT is a video file (anything cv2.VideoCapture opens) or an OTB folder
 (img/ with the frames, groundtruth.txt whose first line is the box). BOX is
 x,y,w,h in the first frame (taken from groundtruth.txt for an OTB folder).
 --nanotrack names the folder with NanoTrack's two ONNX files
 (nanotrack_backbone_sim.onnx, nanotrack_head_sim.onnx); without it
-NanoTrack is left out. --config accurate runs pftrack's Config::accurate
-(both correlation filters) instead of its defaults. Needs
+NanoTrack is left out. --config fast runs pftrack's Config::fast (the
+grey-level correlation filter alone) instead of its default,
+Config::accurate. Needs
 opencv-contrib-python(-headless) >= 4.7.
 """
 
@@ -110,7 +111,7 @@ def main():
     ap.add_argument("--nanotrack", help="the folder with NanoTrack's two ONNX files")
     ap.add_argument("--frames", type=int, default=0, help="at most this many frames (0: all)")
     ap.add_argument("--out", default="side_by_side.mp4")
-    ap.add_argument("--config", default="default", choices=("default", "accurate"), help="pftrack's configuration")
+    ap.add_argument("--config", default="default", choices=("default", "accurate", "fast"), help="pftrack's configuration")
     a = ap.parse_args()
 
     truth = truth_of(a.input)

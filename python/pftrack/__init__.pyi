@@ -27,9 +27,10 @@ class Tracker:
     ``particles`` is 25, 50, 100, 200 or 400 (fewer run faster; any other
     count raises ``ValueError``); ``seed`` makes runs repeatable; ``rgb``
     reads HxWx3 arrays as RGB instead of OpenCV's BGR. Settings: ``config``
-    (``"default"``, or ``"accurate"`` for both correlation filters and a lost
-    target looked for where it was lost: more accurate, about a quarter
-    slower; the other settings apply over it), ``lost_below``, ``found_above``, ``alpha``, ``sure_share`` (floats),
+    (``"default"``, which is ``"accurate"``: both correlation filters and a
+    lost target looked for where it was lost; or ``"fast"``: the grey-level
+    filter alone, a lost target looked for over the frame, less accurate and
+    about a quarter faster; the other settings apply over it), ``lost_below``, ``found_above``, ``alpha``, ``sure_share`` (floats),
     ``lost_after`` (int), ``correlation``, ``scene_motion`` (bools),
     ``redetect`` (``"off"``, ``"near"``, the default, or ``"frame"``). Bad
     settings raise ``ValueError`` (out of range) or ``TypeError`` (unknown).

@@ -217,8 +217,8 @@ fn pixels<'py, 'b>(
 }
 
 /// The configuration from keyword settings over the one `config` names
-/// (`"default"` unless given; `"accurate"`: `Config::accurate`), whatever
-/// the keywords' order.
+/// (`"default"` unless given, which is `"accurate"`, `Config::accurate`;
+/// `"fast"`: `Config::fast`), whatever the keywords' order.
 fn config_of(settings: Option<&Bound<'_, PyDict>>) -> PyResult<Config> {
     let Some(settings) = settings else { return Ok(Config::default()) };
     let mut c = match settings.get_item("config")? {
@@ -226,9 +226,10 @@ fn config_of(settings: Option<&Bound<'_, PyDict>>) -> PyResult<Config> {
         Some(v) => match v.extract::<String>()?.as_str() {
             "default" => Config::default(),
             "accurate" => Config::accurate(),
+            "fast" => Config::fast(),
             other => {
                 return Err(PyValueError::new_err(format!(
-                    "config: {other:?} is neither \"default\" nor \"accurate\""
+                    "config: {other:?} is not \"default\", \"accurate\" or \"fast\""
                 )));
             }
         },

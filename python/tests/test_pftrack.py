@@ -72,7 +72,7 @@ def python_track(path, seed, **settings):
 
 def rust_track(path, seed, *sets):
     if not TRACK.exists():
-        pytest.fail(f"{TRACK} missing: cargo build --release -p host-tests --features gradient --bin track")
+        pytest.fail(f"{TRACK} missing: cargo build --release -p host-tests --bin track")
     box = ",".join(repr(v) for v in read_fixture(path)[4])
     args = [str(TRACK), "run", str(path), "--box", box, "--seed", str(seed)]
     for s in sets:
@@ -93,14 +93,14 @@ def test_every_fixture_tracks_as_the_rust_tool_does(path):
 
 
 @pytest.mark.parametrize("path", FIXTURES, ids=lambda p: p.stem)
-def test_the_accurate_configuration_tracks_as_the_rust_tool_does(path):
-    # Reason: the same cross-check for `Config::accurate`, which the wheel
-    # builds the gradient filter for (`track` built with `--features
-    # gradient`), with a setting over it to show the keywords apply after
-    # `config` whatever their order.
-    settings = {"lost_below": 0.55, "config": "accurate"}
-    assert python_track(path, 2, **settings) == rust_track(path, 2, "config=accurate", "life=confidence:0.55:0.8")
-    assert python_track(path, 2, config="accurate") != python_track(path, 2), "accurate is another configuration"
+def test_the_fast_configuration_tracks_as_the_rust_tool_does(path):
+    # Reason: the same cross-check for `Config::fast`, with a setting over
+    # it to show the keywords apply after `config` whatever their order;
+    # the default is `Config::accurate` by name too.
+    settings = {"lost_below": 0.55, "config": "fast"}
+    assert python_track(path, 2, **settings) == rust_track(path, 2, "config=fast", "life=confidence:0.55:0.8")
+    assert python_track(path, 2, config="fast") != python_track(path, 2), "fast is another configuration"
+    assert python_track(path, 2, config="accurate") == python_track(path, 2)
 
 
 PARTICLES = (25, 50, 100, 200, 400)
@@ -215,7 +215,7 @@ def test_bad_input_raises_not_crashes():
     with pytest.raises(ValueError, match="redetect"):
         pftrack.Tracker(redetect="everywhere")
     with pytest.raises(ValueError, match="config"):
-        pftrack.Tracker(config="fast")
+        pftrack.Tracker(config="quick")
     for choice in ("off", "near", "frame"):
         pftrack.Tracker(redetect=choice)
     t.init(square(0), (40, 50, 20, 20))

@@ -214,8 +214,10 @@ pub(crate) fn command(paths: &[PathBuf], opts: &AblateOpts<'_>, common: &Common)
         .map(|&(name, sets)| (name, sets, Method::Pf))
         .chain(OTHER_TRACKERS.iter().map(|&(name, m)| (name, &[][..], m)));
     for (name, sets, method) in variants.filter(|(n, _, _)| opts.only.is_none_or(|o| n.contains(o))) {
+        // The command line's settings first, so that `--set config=fast`
+        // is the base every variant changes.
         let mut config = Config::default();
-        for s in sets.iter().map(|s| s.to_string()).chain(common.set.iter().cloned()) {
+        for s in common.set.iter().cloned().chain(sets.iter().map(|s| s.to_string())) {
             host_tests::settings::apply(&mut config, &s)?;
         }
         config.validate().map_err(|e| format!("variant `{name}`: {e}"))?;
