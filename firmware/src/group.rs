@@ -24,7 +24,7 @@ type FwGroup = Group<TARGETS, 100>;
 pub fn run(
     out: &mut impl Write,
     stream: &mut FixtureStream,
-    (pixels, ticks): (&mut [u8], &mut [u32]),
+    ticks: &mut [u32],
     (path, seed, kind): (&str, u64, &str),
 ) -> bool {
     macro_rules! fail {
@@ -49,6 +49,12 @@ pub fn run(
         Ok(Some(g)) => g,
         Ok(None) => fail!("group taken"),
         Err(e) => fail!("{e}"),
+    };
+    // Only now, as for one tracker (`crate::frame_buffer`).
+    let Some(buffer) = crate::frame_buffer() else { fail!("buffer taken") };
+    let pixels = match buffer.get_mut(..h.frame_len()) {
+        Some(p) => p,
+        None => fail!("{path}: frames larger than the buffer"),
     };
     let Some(mut cp) = cortex_m::Peripherals::take() else { fail!("peripherals taken") };
     crate::start_systick(&mut cp);
@@ -109,12 +115,7 @@ pub fn run(
 
 /// A build without the `group` feature refuses a fixture of several targets.
 #[cfg(not(feature = "group"))]
-pub fn run(
-    out: &mut impl Write,
-    stream: &mut FixtureStream,
-    _: (&mut [u8], &mut [u32]),
-    (path, _, _): (&str, u64, &str),
-) -> bool {
+pub fn run(out: &mut impl Write, stream: &mut FixtureStream, _: &mut [u32], (path, _, _): (&str, u64, &str)) -> bool {
     let _ = writeln!(
         out,
         "error: {path} has {} targets; this build ({}) tracks one (the `group` feature tracks several)",

@@ -108,10 +108,9 @@ fn run() -> bool {
         );
     }
 
-    let Some(pixels) = cortex_m::singleton!(: [u8; FRAME_BYTES] = [0; FRAME_BYTES]) else { fail!("buffer taken") };
     let Some(ticks) = cortex_m::singleton!(: [u32; MAX_FRAMES] = [0; MAX_FRAMES]) else { fail!("buffer taken") };
     if h.targets > 1 {
-        return group::run(&mut out, &mut stream, (&mut pixels[..frame_len], ticks), (path, seed, kind));
+        return group::run(&mut out, &mut stream, ticks, (path, seed, kind));
     }
     let made = match kind {
         "pf" => make_tracker(seed).map(|t| t.map(Any::Pf)),
@@ -132,6 +131,8 @@ fn run() -> bool {
         Ok(None) => fail!("tracker taken"),
         Err(e) => fail!("{e}"),
     };
+    // Only now: the tracker's construction may have run into it.
+    let Some(pixels) = frame_buffer() else { fail!("buffer taken") };
 
     let Some(mut cp) = cortex_m::Peripherals::take() else { fail!("peripherals taken") };
     start_systick(&mut cp);
@@ -224,6 +225,43 @@ fn start_systick(cp: &mut cortex_m::Peripherals) {
     cp.SYST.enable_counter();
 }
 
+/// The buffer frames are read into, the largest static, in `.uninit`: after
+/// every other static, just below the stack. A tracker is built (`make_*`)
+/// through a temporary the size of the tracker on the stack, before the
+/// buffer is first taken; where the statics nearly fill the RAM (the
+/// STM32F405's 128 KiB with the gradient filter built in) that temporary
+/// runs into this buffer, which holds nothing yet, and not into a static
+/// in use.
+#[unsafe(link_section = ".uninit.pftrack_frame")]
+static mut FRAME: core::mem::MaybeUninit<[u8; FRAME_BYTES]> = core::mem::MaybeUninit::uninit();
+
+/// The frame buffer, zeroed, the first time; `None` after.
+pub(crate) fn frame_buffer() -> Option<&'static mut [u8; FRAME_BYTES]> {
+    static mut TAKEN: bool = false;
+    cortex_m::interrupt::free(|_| {
+        // SAFETY: `TAKEN` and `FRAME` are touched only here, with interrupts
+        // off, and `FRAME` is handed out once, zeroed first.
+        unsafe {
+            if TAKEN {
+                return None;
+            }
+            TAKEN = true;
+            let p = core::ptr::addr_of_mut!(FRAME).cast::<u8>();
+            core::ptr::write_bytes(p, 0, FRAME_BYTES);
+            Some(&mut *p.cast::<[u8; FRAME_BYTES]>())
+        }
+    })
+}
+
+/// The one static every kind of particle-filter tracker is built into (a
+/// run builds one): a static per kind would take a tracker's RAM once for
+/// every kind the build has. Inlined into each `make_*`, so that the
+/// tracker is moved once, as it was there.
+#[inline(always)]
+fn keep(t: FwTracker) -> Option<&'static mut FwTracker> {
+    cortex_m::singleton!(: FwTracker = t)
+}
+
 /// Builds the tracker into a static. Kept out of line: constructing it needs
 /// a temporary the size of the tracker, and that stack frame must be gone
 /// before the tracking loop whose stack is measured.
@@ -233,7 +271,7 @@ fn make_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Er
     // correlation filter where the build has it (the default), the colour
     // cues alone where it does not.
     let t = FwTracker::new(Config::fast(), seed)?;
-    Ok(cortex_m::singleton!(: FwTracker = t))
+    Ok(keep(t))
 }
 
 /// [`make_tracker`] with the surroundings-motion test off, in the build with
@@ -244,7 +282,7 @@ fn make_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Er
 #[inline(never)]
 fn make_still_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
     let t = FwTracker::new(Config { scene_motion: false, ..Config::fast() }, seed)?;
-    Ok(cortex_m::singleton!(: FwTracker = t))
+    Ok(keep(t))
 }
 
 /// [`make_tracker`] observing [`SURE_SHARE`] of the hypotheses after a
@@ -254,7 +292,7 @@ fn make_still_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftra
 #[inline(never)]
 fn make_sure_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
     let t = FwTracker::new(Config { sure_share: SURE_SHARE, ..Config::fast() }, seed)?;
-    Ok(cortex_m::singleton!(: FwTracker = t))
+    Ok(keep(t))
 }
 
 /// [`make_tracker`] with the gradient filter in place of the grey-level
@@ -265,7 +303,7 @@ fn make_sure_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrac
 fn make_gradient_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
     let config = Config { gradient: Some(pftrack::GradientCue::MEASURED), correlation: None, ..Config::fast() };
     let t = FwTracker::new(config, seed)?;
-    Ok(cortex_m::singleton!(: FwTracker = t))
+    Ok(keep(t))
 }
 
 /// [`make_tracker`] with `Config::accurate` (the gradient filter beside
@@ -274,7 +312,7 @@ fn make_gradient_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pf
 #[inline(never)]
 fn make_accurate_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
     let t = FwTracker::new(Config::accurate(), seed)?;
-    Ok(cortex_m::singleton!(: FwTracker = t))
+    Ok(keep(t))
 }
 
 /// The share of hypotheses the audit's `pf-sure` trackers and groups observe
