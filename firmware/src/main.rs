@@ -256,7 +256,7 @@ pub(crate) fn frame_buffer() -> Option<&'static mut [u8; FRAME_BYTES]> {
 /// The one static every kind of particle-filter tracker is built into (a
 /// run builds one): a static per kind would take a tracker's RAM once for
 /// every kind the build has. Inlined into each `make_*`, so that the
-/// tracker is moved once, as it was there.
+/// tracker is moved once, from the constructor's result into the static.
 #[inline(always)]
 fn keep(t: FwTracker) -> Option<&'static mut FwTracker> {
     cortex_m::singleton!(: FwTracker = t)
