@@ -478,6 +478,30 @@ impl Config {
         }
     }
 
+    /// The names [`Config::named`] knows, for tools that take a
+    /// configuration as text.
+    pub const NAMES: [&'static str; 3] = ["default", "accurate", "fast"];
+
+    /// The configuration named `name`: `"default"` ([`Config::default`]),
+    /// `"accurate"` ([`Config::accurate`]) or `"fast"` ([`Config::fast`]);
+    /// `None` for any other name.
+    ///
+    /// ```
+    /// use pftrack::Config;
+    ///
+    /// assert_eq!(Config::named("fast"), Some(Config::fast()));
+    /// assert!(Config::NAMES.iter().all(|n| Config::named(n).is_some()));
+    /// assert_eq!(Config::named("quick"), None);
+    /// ```
+    pub fn named(name: &str) -> Option<Self> {
+        match name {
+            "default" => Some(Config::default()),
+            "accurate" => Some(Config::accurate()),
+            "fast" => Some(Config::fast()),
+            _ => None,
+        }
+    }
+
     /// Whether some technique reads the surroundings' colours (see
     /// [`crate::foreground`]), so that the tracker learns them.
     pub fn uses_surroundings(&self) -> bool {

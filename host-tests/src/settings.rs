@@ -31,12 +31,8 @@ pub const KEYS: &[Key] = &[
         "config",
         "default | accurate | fast (the whole configuration, which the settings after it change: Config::default, which is Config::accurate, both filters; or Config::fast, the grey-level filter alone)",
         |c, k, v| {
-            *c = match v {
-                "default" => Config::default(),
-                "accurate" => Config::accurate(),
-                "fast" => Config::fast(),
-                _ => return Err(format!("{k}: `{v}` is not default, accurate or fast")),
-            };
+            let [a, b, f] = Config::NAMES;
+            *c = Config::named(v).ok_or_else(|| format!("{k}: `{v}` is not {a}, {b} or {f}"))?;
             Ok(())
         },
     ),

@@ -475,6 +475,14 @@ fn held(fx: &Fixture, cfg: Config, seed: u64) -> (f64, usize) {
     (mean_ious(fx, &est).0, est.iter().filter(|e| e.state != TrackState::Tracking).count())
 }
 
+/// Asserts that a tracker with `cfg`, named `label`, reaches a mean IoU of
+/// `bar` on `fx` with `seed` ([`held`]) and reports no frame not tracking.
+fn assert_held(fx: &Fixture, (label, cfg): (&str, Config), seed: u64, bar: f64) {
+    let (got, not_tracking) = held(fx, cfg, seed);
+    assert!(got >= bar, "{label} seed {seed}: mean IoU {got:.2}");
+    assert_eq!(not_tracking, 0, "{label} seed {seed}: reported not tracking");
+}
+
 #[test]
 fn follows_a_target_while_the_view_pans() {
     // Reason: exact truth from the generator: the whole background moves
@@ -488,9 +496,7 @@ fn follows_a_target_while_the_view_pans() {
     each_named(|label, cfg| {
         let fx = load("pan");
         for seed in SEEDS {
-            let (got, not_tracking) = held(&fx, cfg, seed);
-            assert!(got >= 0.6, "{label} seed {seed}: mean IoU {got:.2}");
-            assert_eq!(not_tracking, 0, "{label} seed {seed}: reported not tracking");
+            assert_held(&fx, (label, cfg), seed, 0.6);
         }
     });
 }
@@ -512,11 +518,7 @@ fn keeps_a_small_target_that_moves_most_of_its_size_a_frame() {
     let fx = load("small_fast");
     let off = Config { redetect: Redetect::Off, ..Config::fast() };
     for seed in 1..=16 {
-        each_named(|label, cfg| {
-            let (got, not_tracking) = held(&fx, cfg, seed);
-            assert!(got >= 0.5, "{label} seed {seed}: mean IoU {got:.2}");
-            assert_eq!(not_tracking, 0, "{label} seed {seed}: reported not tracking");
-        });
+        each_named(|label, cfg| assert_held(&fx, (label, cfg), seed, 0.5));
         let (without, not_tracking) = held(&fx, off, seed);
         assert!(
             without < 0.5 || not_tracking > 0,
@@ -536,9 +538,7 @@ fn follows_a_target_that_turns_half_a_turn() {
     each_named(|label, cfg| {
         let fx = load("rotate");
         for seed in SEEDS {
-            let (got, not_tracking) = held(&fx, cfg, seed);
-            assert!(got >= 0.6, "{label} seed {seed}: mean IoU {got:.2}");
-            assert_eq!(not_tracking, 0, "{label} seed {seed}: reported not tracking");
+            assert_held(&fx, (label, cfg), seed, 0.6);
         }
     });
 }

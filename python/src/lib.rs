@@ -223,16 +223,13 @@ fn config_of(settings: Option<&Bound<'_, PyDict>>) -> PyResult<Config> {
     let Some(settings) = settings else { return Ok(Config::default()) };
     let mut c = match settings.get_item("config")? {
         None => Config::default(),
-        Some(v) => match v.extract::<String>()?.as_str() {
-            "default" => Config::default(),
-            "accurate" => Config::accurate(),
-            "fast" => Config::fast(),
-            other => {
-                return Err(PyValueError::new_err(format!(
-                    "config: {other:?} is not \"default\", \"accurate\" or \"fast\""
-                )));
-            }
-        },
+        Some(v) => {
+            let name = v.extract::<String>()?;
+            let [a, b, f] = Config::NAMES;
+            Config::named(&name).ok_or_else(|| {
+                PyValueError::new_err(format!("config: {name:?} is not {a:?}, {b:?} or {f:?}"))
+            })?
+        }
     };
     let (mut lost_below, mut found_above) = match c.life {
         Life::Confidence { lost_below, found_above } => (lost_below, found_above),

@@ -61,8 +61,8 @@ fn a_group_of_one_is_a_tracker_with_the_same_seed() {
     // group's shared scratch rather than the tracker's own.
     let path = |t: usize| (30.0 + 2.5 * t as f32, 48.0 + 6.0 * (t as f32 * 0.3).sin());
     let first = scene(&[path(0)], 16, 0);
-    let shared = Config { sure_share: 0.6, ..Config::default() };
-    let mut cases = vec![(1, Config::default()), (7, Config::default()), (1, shared), (7, shared)];
+    let shared = Config { sure_share: 0.6, ..Config::fast() };
+    let mut cases = vec![(1, Config::fast()), (7, Config::fast()), (1, shared), (7, shared)];
     if cfg!(feature = "gradient") {
         let without = Config { gradient: None, ..Config::accurate() };
         cases.extend([(1, Config::accurate()), (7, Config::accurate()), (1, without)]);
@@ -191,7 +191,7 @@ fn targets_near_each_other_observe_all_their_hypotheses() {
     // seed swaps and at 0.7 none, as docs/several-targets.md says.)
     const N: usize = 60;
     let share = if cfg!(feature = "correlation") { 0.6 } else { 0.7 };
-    let cfg = Config { sure_share: share, ..Config::default() };
+    let cfg = Config { sure_share: share, ..Config::fast() };
     let (mut shared, mut all_near) = (0, 0);
     for seed in 1..=16 {
         assert_eq!(swaps_with(seed, cfg), 0, "seed {seed}: a swap or a merge");
