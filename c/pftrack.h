@@ -110,7 +110,7 @@
 
 #if defined(__LP64__)
 // 64-bit words of a [`pftrack_tracker`] on a 64-bit target.
-#define PFTRACK_TRACKER_WORDS 4633
+#define PFTRACK_TRACKER_WORDS 4634
 #endif
 
 #if !defined(__LP64__)

@@ -230,7 +230,7 @@ pub enum Life {
     Appearance,
     /// The estimate's confidence decides: the probability that the estimate
     /// is on the target, from how much its box stands out from the ring
-    /// around it, its grey-level correlation with the first template and
+    /// around it, its grey-level correlation with the template and
     /// its colour similarity with the first model (see
     /// [`crate::Estimate::confidence`]). The model adapts only above
     /// `found_above`, so a drifting estimate cannot teach the model its drift.
@@ -245,7 +245,11 @@ pub enum Life {
 
 /// The grey-level template cue: each particle's normalised cross-correlation
 /// with the template (negative correlations count as 0) is mixed into its
-/// similarity as `(1 − weight) · s + weight · ncc`.
+/// similarity as `(1 − weight) · s + weight · ncc`, and the template, the
+/// first box's, is blended towards the estimate's on model-update frames.
+/// Weight 0 keeps the particles' similarity as it is and only adapts the
+/// template that the size and position searches and the confidence read
+/// (without this cue they read the first box's).
 #[derive(Copy, Clone, Debug, PartialEq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct TemplateCue {
@@ -260,10 +264,14 @@ pub struct TemplateCue {
 /// and shorter, and narrower and taller, are
 /// scored by their contrast with the ring around them in the map of
 /// `P(target | colour)` (see [`crate::foreground`]) plus `similarity` times
-/// their similarity with the models; the best becomes the estimate, and the
+/// their similarity with the models and `template` times their grey-level
+/// correlation with the template; the best becomes the estimate, and the
 /// particles are rescaled with it. Contrast penalises a box too large (it
 /// takes in background), the model similarity one too small (it leaves out
-/// colours the model has). Two pulls towards the first box's shape and
+/// colours the model has), the template a box that has grown over something
+/// of the target's colours but not its layout (a shadow, a reflection, the
+/// body below a face): each candidate is read at its own size, so its
+/// layout matches only at the target's. Two pulls towards the first box's shape and
 /// area (the scale regularisation of ASMS, Vojíř et al. 2014) keep the box
 /// from wandering one 2% step at a time where contrast and similarity are
 /// flat, as on a dark target against a dark background. There is no search
@@ -287,6 +295,9 @@ pub struct SizeSearch {
     /// this times `|ln(area / initial area)|` is taken off its score, in
     /// `[0, 10]`.
     pub scale_pull: Real,
+    /// Weight of the candidates' grey-level correlation with the template
+    /// (see [`crate::template`]), in `[0, 10]`.
+    pub template: Real,
 }
 
 /// How the estimate's position is refined each frame, after its size: the
@@ -294,7 +305,7 @@ pub struct SizeSearch {
 /// size search's candidates (contrast with the ring around them in the map
 /// of [`crate::foreground`], plus `similarity` times their similarity with
 /// the models), plus `template` times their grey-level correlation with
-/// the first template, and the best is kept, for up to `rounds` steps
+/// the template, and the best is kept, for up to `rounds` steps
 /// (stopping where none of the four beats the box). The particles move
 /// with the estimate, so that a filter that lags a moving target catches
 /// up.
@@ -308,8 +319,8 @@ pub struct ShiftSearch {
     pub rounds: u8,
     /// Weight of the candidates' similarity with the models, in `[0, 10]`.
     pub similarity: Real,
-    /// Weight of the candidates' grey-level correlation with the first
-    /// template (see [`crate::template`]), in `[0, 10]`: colour cannot tell
+    /// Weight of the candidates' grey-level correlation with the template
+    /// (see [`crate::template`]), in `[0, 10]`: colour cannot tell
     /// a box from the same box a few pixels off on a target of one colour,
     /// the layout of light and dark can.
     pub template: Real,
@@ -375,7 +386,7 @@ impl Config {
     /// budget of 500 samples, damped velocities with wide position noise (a
     /// fifth of the target's size, or its recent speed if that is more), σ
     /// from the particles' spread, the size (pulled towards the first box's)
-    /// and then the position (with the first grey template's layout)
+    /// and then the position (with the grey template's layout)
     /// searched against the surroundings, the colour model weighted towards
     /// the target's distinctive colours (strength 0.5 above odds 0.8), the
     /// grey-level filter where the `correlation` feature is built, and the
@@ -430,7 +441,14 @@ impl Config {
             lost_search: LostSearch::Frame,
             sure_share: 1.0,
             scene_motion: crate::motion::DEFAULT,
-            size: Some(SizeSearch { step: 0.02, similarity: 1.0, aspect: true, aspect_pull: 0.03, scale_pull: 0.05 }),
+            size: Some(SizeSearch {
+                step: 0.02,
+                similarity: 1.0,
+                aspect: true,
+                aspect_pull: 0.03,
+                scale_pull: 0.05,
+                template: 0.0,
+            }),
             shift: Some(ShiftSearch { step: 0.05, rounds: 1, similarity: 3.0, template: 0.15 }),
             surroundings_rate: 0.05,
             background_weight: Some(BackgroundWeight { strength: 0.5, above: 0.8 }),
@@ -450,7 +468,10 @@ impl Config {
     /// the bias lost on the check split. A lost target is looked for about
     /// where it was last found, the square widening by 0.05 of its half
     /// axes a frame ([`LostSearch::Widening`]): fewer frames miss the
-    /// target. It takes about half as much RAM again as [`Config::fast`]
+    /// target. The grey-level template follows the target (rate 0.05 on
+    /// model-update frames, [`TemplateCue`] with weight 0) and weighs 0.3
+    /// in the size search ([`SizeSearch::template`]): fewer boxes grow over
+    /// a reflection or a body below, and fewer frames miss the target. It takes about half as much RAM again as [`Config::fast`]
     /// (the gradient filter's memory is in every tracker of a build with
     /// the feature) and more instructions a frame (docs/performance.md); a
     /// build without the `gradient` feature refuses it by name, as it
@@ -474,6 +495,8 @@ impl Config {
             sure_share: 0.6,
             correlation,
             lost_search: LostSearch::Widening { growth: 0.05 },
+            size: Config::fast().size.map(|s| SizeSearch { template: 0.3, ..s }),
+            template: Some(TemplateCue { weight: 0.0, rate: 0.05 }),
             ..Config::fast()
         }
     }
@@ -515,7 +538,10 @@ impl Config {
     /// Whether some technique reads the grey-level template (see
     /// [`crate::template`]), so that the tracker learns it.
     pub fn uses_template(&self) -> bool {
-        self.life != Life::Appearance || self.template.is_some() || self.shift.is_some_and(|s| s.template > 0.0)
+        self.life != Life::Appearance
+            || self.template.is_some()
+            || self.shift.is_some_and(|s| s.template > 0.0)
+            || self.size.is_some_and(|s| s.template > 0.0)
     }
 
     /// Checks every field against its documented range.
@@ -612,6 +638,7 @@ impl Config {
             check("size.similarity", s.similarity, 0.0, 10.0)?;
             check("size.aspect_pull", s.aspect_pull, 0.0, 10.0)?;
             check("size.scale_pull", s.scale_pull, 0.0, 10.0)?;
+            check("size.template", s.template, 0.0, 10.0)?;
         }
         if let Some(s) = self.shift {
             positive("shift.step", s.step, 0.5)?;

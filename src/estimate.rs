@@ -40,7 +40,7 @@ pub struct Estimate {
     /// How sure the tracker is of the estimate, in `[0, 1]`. With
     /// [`crate::Life::Confidence`] (the default), the probability that the
     /// estimate is on its target, from how much it stands out from its
-    /// surroundings, its correlation with the first template and its
+    /// surroundings, its correlation with the grey-level template and its
     /// colour similarity with the first model (see [`crate::on_target`]),
     /// halved on a frame where the box moves with its surroundings
     /// ([`crate::Config::scene_motion`]); with
@@ -173,7 +173,8 @@ pub struct Diagnostics {
     /// Contrast of the estimate's box with the ring around it in the
     /// foreground map, in `[-1, 1]`.
     pub contrast: Real,
-    /// Grey-level correlation of the estimate with the first template, in `[-1, 1]`.
+    /// Grey-level correlation of the estimate with the template (the first
+    /// box's, or as [`crate::TemplateCue`] adapts it), in `[-1, 1]`.
     pub correlation: Real,
     /// Colour similarity of the estimate with the first model, in `[0, 1]`.
     pub anchored: Real,

@@ -107,7 +107,7 @@ pub const PFTRACK_EVENT_REACQUIRED: u32 = 4;
 
 /// 64-bit words of a [`pftrack_tracker`] on a 64-bit target.
 #[cfg(target_pointer_width = "64")]
-pub const PFTRACK_TRACKER_WORDS: usize = 4633;
+pub const PFTRACK_TRACKER_WORDS: usize = 4634;
 /// 64-bit words of a [`pftrack_tracker`] on a 32-bit target.
 #[cfg(not(target_pointer_width = "64"))]
 pub const PFTRACK_TRACKER_WORDS: usize = 4626;

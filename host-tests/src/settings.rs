@@ -108,7 +108,8 @@ pub const KEYS: &[Key] = &[
     ),
     key(
         "size",
-        "off | STEP:SIMILARITY:ASPECT_PULL:SCALE_PULL | STEP:SIMILARITY:scale:SCALE_PULL | STEP:SIMILARITY",
+        "off | STEP:SIMILARITY:ASPECT_PULL:SCALE_PULL[:TEMPLATE] | STEP:SIMILARITY:scale:SCALE_PULL[:TEMPLATE] | \
+         STEP:SIMILARITY",
         size,
     ),
     key("surroundings_rate", "adaptation rate of the surroundings' histogram", |c, k, v| {
@@ -309,18 +310,21 @@ fn lost_after(c: &mut Config, _key: &str, v: &str) -> Result<(), String> {
 }
 
 fn size(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
-    // (step, similarity, aspect searched, aspect pull, area pull)
-    let (step, sim, aspect, ap, sp) = match v.split(':').collect::<Vec<_>>().as_slice() {
+    // (step, similarity, aspect searched, aspect pull, area pull, template)
+    let (step, sim, aspect, ap, sp, t) = match v.split(':').collect::<Vec<_>>().as_slice() {
         ["off"] => {
             c.size = None;
             return Ok(());
         }
-        [step, sim] => (*step, *sim, true, "0", "0"),
-        [step, sim, "scale", sp] => (*step, *sim, false, "0", *sp),
-        [step, sim, ap, sp] => (*step, *sim, true, *ap, *sp),
+        [step, sim] => (*step, *sim, true, "0", "0", "0"),
+        [step, sim, "scale", sp] => (*step, *sim, false, "0", *sp, "0"),
+        [step, sim, "scale", sp, t] => (*step, *sim, false, "0", *sp, *t),
+        [step, sim, ap, sp] => (*step, *sim, true, *ap, *sp, "0"),
+        [step, sim, ap, sp, t] => (*step, *sim, true, *ap, *sp, *t),
         _ => {
             return Err(format!(
-                "{key}: `{v}`: expected off, STEP:SIMILARITY:ASPECT_PULL:SCALE_PULL, STEP:SIMILARITY:scale:SCALE_PULL or STEP:SIMILARITY (no pulls)"
+                "{key}: `{v}`: expected off, STEP:SIMILARITY:ASPECT_PULL:SCALE_PULL[:TEMPLATE], \
+                 STEP:SIMILARITY:scale:SCALE_PULL[:TEMPLATE] or STEP:SIMILARITY (no pulls, no template)"
             ));
         }
     };
@@ -330,6 +334,7 @@ fn size(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
         aspect,
         aspect_pull: num(key, ap)?,
         scale_pull: num(key, sp)?,
+        template: num(key, t)?,
     });
     Ok(())
 }

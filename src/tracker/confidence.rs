@@ -21,7 +21,7 @@ pub(super) const SPEED_RATE: Real = 0.3;
 /// The probability that an estimate is on its target, from three signals
 /// that a drifting estimate cannot keep high together: its box's
 /// `contrast` with the ring around it in the foreground map (in `[-1, 1]`),
-/// its grey-level `correlation` with the first template (negative counts as
+/// its grey-level `correlation` with the template (negative counts as
 /// 0), and its colour similarity with the first model, `anchored`.
 ///
 /// A logistic model, `1 / (1 + exp(−z))` with `z = 9.2·contrast +

@@ -53,9 +53,12 @@ pub(super) struct Target<const K: usize> {
     pub(super) half_axes: (Real, Real),
     /// The initial box's half axes, which the size search is pulled towards.
     pub(super) initial_axes: (Real, Real),
-    /// For [`ModelUpdate::WhenDegraded`]: the sum and count of the
-    /// confidences that make up `ρ₀`.
-    pub(super) rho0: (Real, u16),
+    /// For [`ModelUpdate::WhenDegraded`]: the sum of the confidences that
+    /// make up `ρ₀`.
+    pub(super) rho0_sum: Real,
+    /// How many there are (a field of its own, not a pair with the sum:
+    /// beside `edge_threshold` it takes no padding).
+    pub(super) rho0_count: u16,
     /// The last estimate's centre.
     pub(super) centre: (Real, Real),
     /// The centre of the last estimate that found the target, where a lost

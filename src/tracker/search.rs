@@ -13,7 +13,7 @@ use rand_core::Rng;
 /// What the size and position searches measure of a candidate box: its
 /// contrast with its ring in the foreground map, and, once asked for, its
 /// similarity with the models and its grey-level correlation with the
-/// first template. The winner's parts are handed on, so that the next
+/// template. The winner's parts are handed on, so that the next
 /// search and the confidence do not measure the same box again.
 #[derive(Copy, Clone)]
 pub(super) struct Parts {
@@ -81,7 +81,7 @@ pub(super) fn search_size<const K: usize, const E: usize>(
     for &(fx, fy) in candidates {
         let c = Ellipse { hx: e.hx * fx, hy: e.hy * fy, ..*e };
         let Some(mut parts) = Parts::of(sc, &c) else { continue };
-        let mut score = parts.score(sc, cfg, frame, models, &c, search.similarity, 0.0);
+        let mut score = parts.score(sc, cfg, frame, models, &c, search.similarity, search.template);
         if search.aspect_pull > 0.0 {
             score -= search.aspect_pull * ln((c.hx * iy) / (c.hy * ix)).abs();
         }

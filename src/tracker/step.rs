@@ -231,9 +231,13 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
             if rho > target.threshold {
                 out.appearing += 1;
             }
+            // A template kept for the searches and the confidence alone
+            // (weight 0) costs the particles nothing.
             *w = match cfg.template {
-                Some(t) => (1.0 - t.weight) * sim + t.weight * target.models.template.correlation(frame, &e).max(0.0),
-                None => sim,
+                Some(t) if t.weight > 0.0 => {
+                    (1.0 - t.weight) * sim + t.weight * target.models.template.correlation(frame, &e).max(0.0)
+                }
+                _ => sim,
             };
             if crate::boundary::on(cfg.boundary) {
                 *g = crate::boundary::score(frame, &e);
@@ -445,7 +449,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
                 gaussian(d2_max * (1.0 - look.similarity), cfg.update_sigma) > cfg.update_threshold
             }
             ModelUpdate::WhenDegraded { factor, frames } => {
-                let (sum, n) = &mut target.rho0;
+                let (sum, n) = (&mut target.rho0_sum, &mut target.rho0_count);
                 if *n < frames {
                     // Still learning ρ₀ on the first tracking frames, where
                     // the estimate is assumed good (as the paper does).
