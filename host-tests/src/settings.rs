@@ -495,4 +495,24 @@ mod tests {
         assert!(apply(&mut Config::default(), "sigma").is_err());
         assert!(apply(&mut Config::default(), "sigma=abc").is_err());
     }
+
+    #[test]
+    fn the_size_search_reads_its_fields_in_order() {
+        // Reason: the help text's forms, field by field; the shorter forms
+        // leave the template's weight at 0.
+        let size = |v: &str| {
+            let mut c = Config::default();
+            apply(&mut c, &format!("size={v}")).map(|()| c.size)
+        };
+        let s = size("0.02:1:0.03:0.05:0.3").unwrap().unwrap();
+        assert_eq!(
+            (s.step, s.similarity, s.aspect, s.aspect_pull, s.scale_pull, s.template),
+            (0.02, 1.0, true, 0.03, 0.05, 0.3)
+        );
+        let s = size("0.02:1:scale:0.05:0.2").unwrap().unwrap();
+        assert_eq!((s.aspect, s.aspect_pull, s.scale_pull, s.template), (false, 0.0, 0.05, 0.2));
+        assert_eq!(size("0.02:1:0.03:0.05").unwrap().unwrap().template, 0.0);
+        assert_eq!(size("off").unwrap(), None);
+        assert!(size("0.02:1:0.03:0.05:0.3:1").is_err());
+    }
 }
