@@ -2,9 +2,9 @@
 //! refuses them, or a tracker can be built and run with them.
 #![no_main]
 use libfuzzer_sys::fuzz_target;
-use pftrack::{BoundingBox, Config, Frame, LostSearch, PixelFormat, Sigma, Tracker};
+use pftrack::{BoundingBox, Config, Frame, LostSearch, PixelFormat, Sigma, SizeSearch, Tracker};
 
-fuzz_target!(|v: [f32; 17]| {
+fuzz_target!(|v: [f32; 18]| {
     let mut c = Config::default();
     c.likelihood.sigma = if v[0] >= 0.0 { Sigma::Fixed(v[1]) } else { Sigma::Adaptive { min: v[1], max: v[2] } };
     c.likelihood.eps = v[3];
@@ -22,6 +22,7 @@ fuzz_target!(|v: [f32; 17]| {
     c.sure_share = v[15];
     // Lost after one miss, so that the steps below reach the lost search.
     c.lost_search = LostSearch::Widening { growth: v[16] };
+    c.size = c.size.map(|s| SizeSearch { template: v[17], ..s });
     c.lost_after = 1;
     if c.validate().is_err() {
         assert!(Tracker::<8>::new(c, 1).is_err(), "the constructor validates too");
