@@ -22,15 +22,28 @@ pub(super) const SPEED_RATE: Real = 0.3;
 /// that a drifting estimate cannot keep high together: its box's
 /// `contrast` with the ring around it in the foreground map (in `[-1, 1]`),
 /// its grey-level `correlation` with the template (negative counts as
-/// 0), and its colour similarity with the first model, `anchored`.
+/// 0), and its colour similarity with the first model, `anchored`; and
+/// from how far its size has gone from the first box's, `size_change`
+/// (`|ln(area / first area)|`): a box that has grown over its
+/// surroundings or shrunk onto a part of the target is more often off it.
 ///
-/// A logistic model, `1 / (1 + exp(−z))` with `z = 9.2·contrast +
-/// 2.4·correlation + 4.8·anchored − 4.2`, whose coefficients are a logistic
-/// regression of "IoU with the truth ≥ 0.1" on the real sequences' tune
-/// split (`tools/fit-confidence`; docs/accuracy.md). Together the three
-/// separate missing frames from the others better there than any one of
-/// them alone (the ROC AUCs are in docs/accuracy.md).
-pub fn on_target(contrast: Real, correlation: Real, anchored: Real) -> Real {
-    let z = 9.2 * contrast + 2.4 * correlation.max(0.0) + 4.8 * anchored - 4.2;
+/// A logistic model, `1 / (1 + exp(−z))` with `z = 8.31·contrast +
+/// 3.06·correlation + 3.31·anchored − 2.33·size_change − 2.37`, whose
+/// coefficients are a logistic regression of "IoU with the truth ≥ 0.1"
+/// on the real sequences' tune split (`tools/fit-confidence`;
+/// docs/accuracy.md). Together the four separate missing frames from the
+/// others better there than any one of them alone (the ROC AUCs are in
+/// docs/accuracy.md).
+///
+/// ```
+/// // A box that stands out, with the target's layout and colours, at its
+/// // first size: z = 8.31·0.4 + 3.06·0.8 + 3.31·0.9 − 2.37 = 6.38.
+/// let p = pftrack::on_target(0.4, 0.8, 0.9, 0.0);
+/// assert!((p - 1.0 / (1.0 + (-6.38f32).exp())).abs() < 1e-3);
+/// // The same box grown to four times the first area is less sure.
+/// assert!(pftrack::on_target(0.4, 0.8, 0.9, 4f32.ln()) < p);
+/// ```
+pub fn on_target(contrast: Real, correlation: Real, anchored: Real, size_change: Real) -> Real {
+    let z = 8.31 * contrast + 3.06 * correlation.max(0.0) + 3.31 * anchored - 2.33 * size_change - 2.37;
     1.0 / (1.0 + exp(-z))
 }

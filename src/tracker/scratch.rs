@@ -70,6 +70,15 @@ pub(super) struct Target<const K: usize> {
     pub(super) speed: Real,
 }
 
+impl<const K: usize> Target<K> {
+    /// How far half axes `(hx, hy)` are from the first box's, the
+    /// confidence's size signal: `|ln(area / first area)|`.
+    pub(super) fn size_change(&self, (hx, hy): (Real, Real)) -> Real {
+        let (ix, iy) = self.initial_axes;
+        crate::scalar::ln((hx * hy) / (ix * iy)).abs()
+    }
+}
+
 /// How one region compares with the models.
 #[derive(Copy, Clone, Debug)]
 pub(super) struct Seen {

@@ -4,7 +4,7 @@ use super::confidence::{MOVES_WITH_SCENE, SPEED_RATE, TYPICAL_CONTRAST, on_targe
 use super::scratch::*;
 use super::search::*;
 use super::{ScalePrior, Track, Tracker};
-use crate::apart::{Alone, Apart};
+use crate::apart::{APART, Alone, Apart};
 use crate::config::{Life, LostSearch, ModelUpdate, Redetect};
 use crate::cue::Freedom;
 use crate::error::Error;
@@ -73,7 +73,12 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         // Measured on every frame, so that its running means stay current.
         let stuck = self.cues.miss(&self.config, frame, &look.ellipse, self.state == TrackState::Tracking);
         let was_tracking = self.state == TrackState::Tracking;
-        let event = self.life_cycle(look.found && !stuck);
+        // A group's target that is not tracked is not found on a box whose
+        // core lies mostly in another tracked target's: its hypotheses are
+        // weighed down there, but a look-alike can still carry the
+        // estimate onto it.
+        let taken = A::ANY && !was_tracking && apart.factor(&look.ellipse) < 1.0 - 0.5 * APART;
+        let event = self.life_cycle(look.found && !stuck && !taken);
         self.settled |= self.state == TrackState::Tracking && self.misses == 0;
         self.follow(&look.ellipse, was_tracking);
         let model_updated = self.adapt(scratch, frame, &look, event);
@@ -294,8 +299,9 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         if !(cfg.sure_share < 1.0) || self.state != TrackState::Tracking {
             return N;
         }
-        let d = &self.diag;
-        let sure = on_target(d.contrast, d.correlation, d.anchored) > found_above;
+        let (d, Some(target)) = (&self.diag, self.target.as_ref()) else { return N };
+        // Tracking, the target's size is the last estimate's.
+        let sure = on_target(d.contrast, d.correlation, d.anchored, target.size_change(target.half_axes)) > found_above;
         if !sure || near {
             return N;
         }
@@ -378,7 +384,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
                 let correlation = correlation.unwrap_or_else(|| models.template.correlation(frame, &ellipse));
                 let anchored = seen.anchored;
                 *diag = Diagnostics { contrast, correlation, anchored, similarity, psr };
-                let p = on_target(contrast, correlation, anchored);
+                let p = on_target(contrast, correlation, anchored, target.size_change((ellipse.hx, ellipse.hy)));
                 (p, if *state == TrackState::Tracking { p >= lost_below } else { p > found_above })
             }
         };

@@ -736,7 +736,8 @@ fn a_box_that_moves_with_a_panning_scene_reports_half_its_confidence() {
         let px = if k <= 30 { draw(0, Some(40 + 2 * k)) } else { draw(-2 * (k as i32 - 30), Some(100 + 2 * (k - 30))) };
         let e = t.step(&f(&px)).unwrap();
         let d = t.track.diag;
-        let p = on_target(d.contrast, d.correlation, d.anchored);
+        let size_change = t.track.target.as_ref().unwrap().size_change((e.ellipse.hx, e.ellipse.hy));
+        let p = on_target(d.contrast, d.correlation, d.anchored, size_change);
         if e.confidence != p {
             assert_eq!(e.confidence, p * 0.5, "frame {k}");
             assert!(k > 30, "flagged on the target, frame {k}");

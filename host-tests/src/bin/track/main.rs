@@ -62,8 +62,8 @@ struct Common {
     /// Also append every frame's confidence and the signals behind it to
     /// this CSV file: sequence, frame, IoU with the truth, tracking (1 or
     /// 0), confidence, contrast, correlation, anchored similarity,
-    /// similarity, the correlation filter's PSR (0 without it; see
-    /// `tools/fit-confidence`).
+    /// similarity, the correlation filter's PSR (0 without it), the size
+    /// change from the first box (see `tools/fit-confidence`).
     #[arg(long)]
     dump: Option<PathBuf>,
     /// Start from the first ground-truth box moved by DX of its width and
