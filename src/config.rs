@@ -230,9 +230,9 @@ pub enum Life {
     Appearance,
     /// The estimate's confidence decides: the probability that the estimate
     /// is on the target, from how much its box stands out from the ring
-    /// around it, its grey-level correlation with the template and
-    /// its colour similarity with the first model (see
-    /// [`crate::Estimate::confidence`]). The model adapts only above
+    /// around it, its grey-level correlation with the template, its colour
+    /// similarity with the first model and its size against the first
+    /// box's (see [`crate::Estimate::confidence`]). The model adapts only above
     /// `found_above`, so a drifting estimate cannot teach the model its drift.
     Confidence {
         /// A tracking frame whose confidence is below this is a miss, in `[0, 1]`.
@@ -271,10 +271,10 @@ pub struct TemplateCue {
 /// colours the model has), the template a box that has grown over something
 /// of the target's colours but not its layout (a shadow, a reflection, the
 /// body below a face): each candidate is read at its own size, so its
-/// layout matches only at the target's. Two pulls towards the first box's shape and
-/// area (the scale regularisation of ASMS, Vojíř et al. 2014) keep the box
-/// from wandering one 2% step at a time where contrast and similarity are
-/// flat, as on a dark target against a dark background. There is no search
+/// layout matches only at the target's. Two pulls towards the first box's
+/// shape and area (the scale regularisation of ASMS, Vojíř et al. 2014)
+/// keep the box from wandering one 2% step at a time where contrast and
+/// similarity are flat, as on a dark target against a dark background. There is no search
 /// in table mode, whose size is fixed, nor on a step given a
 /// [`crate::ScalePrior`], which sets the size.
 #[derive(Copy, Clone, Debug, PartialEq)]
@@ -471,8 +471,9 @@ impl Config {
     /// target. The grey-level template follows the target (rate 0.05 on
     /// model-update frames, [`TemplateCue`] with weight 0) and weighs 0.3
     /// in the size search ([`SizeSearch::template`]): fewer boxes grow over
-    /// a reflection or a body below, and fewer frames miss the target. It takes about half as much RAM again as [`Config::fast`]
-    /// (the gradient filter's memory is in every tracker of a build with
+    /// a reflection or a body below, and fewer frames miss the target. It
+    /// takes about half as much RAM again as [`Config::fast`] (the
+    /// gradient filter's memory is in every tracker of a build with
     /// the feature) and more instructions a frame (docs/performance.md); a
     /// build without the `gradient` feature refuses it by name, as it
     /// refuses the filter.

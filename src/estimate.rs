@@ -40,8 +40,9 @@ pub struct Estimate {
     /// How sure the tracker is of the estimate, in `[0, 1]`. With
     /// [`crate::Life::Confidence`] (the default), the probability that the
     /// estimate is on its target, from how much it stands out from its
-    /// surroundings, its correlation with the grey-level template and its
-    /// colour similarity with the first model (see [`crate::on_target`]),
+    /// surroundings, its correlation with the grey-level template, its
+    /// colour similarity with the first model and its size against the
+    /// first box's (see [`crate::on_target`]),
     /// halved on a frame where the box moves with its surroundings
     /// ([`crate::Config::scene_motion`]); with
     /// [`crate::Life::Appearance`], the similarity between the model and the
