@@ -4,7 +4,7 @@ use super::confidence::{MOVES_WITH_SCENE, SPEED_RATE, TYPICAL_CONTRAST, on_targe
 use super::scratch::*;
 use super::search::*;
 use super::{ScalePrior, Track, Tracker};
-use crate::apart::{APART, Alone, Apart};
+use crate::apart::{Alone, Apart};
 use crate::config::{Life, LostSearch, ModelUpdate, Redetect};
 use crate::cue::Freedom;
 use crate::error::Error;
@@ -73,11 +73,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         // Measured on every frame, so that its running means stay current.
         let stuck = self.cues.miss(&self.config, frame, &look.ellipse, self.state == TrackState::Tracking);
         let was_tracking = self.state == TrackState::Tracking;
-        // A group's target that is not tracked is not found on a box whose
-        // core lies mostly in another tracked target's: its hypotheses are
-        // weighed down there, but a look-alike can still carry the
-        // estimate onto it.
-        let taken = A::ANY && !was_tracking && apart.factor(&look.ellipse) < 1.0 - 0.5 * APART;
+        let taken = !was_tracking && apart.taken(&look.ellipse);
         let event = self.life_cycle(look.found && !stuck && !taken);
         self.settled |= self.state == TrackState::Tracking && self.misses == 0;
         self.follow(&look.ellipse, was_tracking);

@@ -101,6 +101,21 @@ fn a_soft_target_keeps_its_edge_cue() {
     assert_eq!(t.edge_threshold(), None, "no cue, no threshold");
 }
 
+/// A grey frame of `background` with `cols` x `rows` blocks of 8x8 px
+/// from `(x0, y0)` (clipped to the frame), each grey 64 or 95 at random
+/// from `seed`, drawn row by row: both levels fall in RGB 8x8x8 bin 2.
+fn blocks(seed: u32, background: u8, (x0, y0): (usize, usize), (cols, rows): (usize, usize)) -> Vec<u8> {
+    let mut next = crate::testing::lcg(seed);
+    let levels: Vec<u8> = (0..cols * rows).map(|_| if next() >> 31 == 1 { 95 } else { 64 }).collect();
+    let mut px = vec![background; W * H * 3];
+    for y in y0..(y0 + 8 * rows).min(H) {
+        for x in x0..(x0 + 8 * cols).min(W) {
+            px[(y * W + x) * 3..][..3].fill(levels[(y - y0) / 8 * cols + (x - x0) / 8]);
+        }
+    }
+    px
+}
+
 #[test]
 fn the_template_term_places_a_box_that_colour_cannot() {
     // Reason: generated scene with known geometry. Every pixel is grey
@@ -111,14 +126,7 @@ fn the_template_term_places_a_box_that_colour_cannot() {
     // dark is unique. The template's correlation falls off over a block
     // (8 px) as a box slides off the learnt spot, so from 4 px right of
     // and 3 px above it, steps of 1.6 px climb back to within a step.
-    let mut next = crate::testing::lcg(7);
-    let levels: Vec<u8> = (0..(W / 8 + 1) * (H / 8 + 1)).map(|_| if next() >> 31 == 1 { 95 } else { 64 }).collect();
-    let mut px = vec![0u8; W * H * 3];
-    for y in 0..H {
-        for x in 0..W {
-            px[(y * W + x) * 3..][..3].fill(levels[(y / 8) * (W / 8 + 1) + x / 8]);
-        }
-    }
+    let px = blocks(7, 0, (0, 0), (W / 8 + 1, H / 8 + 1));
     let f = frame(&px);
     let cfg = Config { edges: None, ..Config::default() };
     let mut t: Tracker<60> = Tracker::new(cfg, 1).unwrap();
@@ -141,17 +149,9 @@ fn the_template_term_places_a_box_that_colour_cannot() {
 /// (see the test below), the candidates' template correlation weighed
 /// `template`.
 fn size_after(template: Real, steps: usize) -> Ellipse {
-    let mut next = crate::testing::lcg(11);
-    let mut level = || if next() >> 31 == 1 { 95 } else { 64 };
-    // 8x8 blocks: the target's 4x4 (rows 29..61) and a row of 4 more
-    // above and below it, of the same two levels.
-    let blocks: Vec<u8> = (0..4 * 6).map(|_| level()).collect();
-    let mut px = vec![100u8; W * H * 3];
-    for y in 21..69 {
-        for x in 44..76 {
-            px[(y * W + x) * 3..][..3].fill(blocks[(y - 21) / 8 * 4 + (x - 44) / 8]);
-        }
-    }
+    // The target's 4x4 blocks (rows 29..61) and a row of 4 more above and
+    // below it.
+    let px = blocks(11, 100, (44, 21), (4, 6));
     let f = frame(&px);
     let cfg = Config { edges: None, ..Config::default() };
     let mut t: Tracker<20> = Tracker::new(cfg, 1).unwrap();
