@@ -110,4 +110,4 @@ pub use meanshift::{MeanShift, MeanShiftConfig, Prediction};
 pub use pixel::PixelFormat;
 pub use region::Sampling;
 pub use scalar::Real;
-pub use tracker::{ScalePrior, Tracker, on_target};
+pub use tracker::{ScalePrior, Tracker, on_target, size_change};

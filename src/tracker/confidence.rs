@@ -1,6 +1,6 @@
 //! The confidence: the probability that an estimate is on its target.
 
-use crate::scalar::{Real, exp};
+use crate::scalar::{Real, exp, ln};
 
 /// The median contrast of estimates on their target (IoU ≥ 0.3) on the
 /// real sequences' tune split (`track otb --dump`), for boxes whose
@@ -24,7 +24,7 @@ pub(super) const SPEED_RATE: Real = 0.3;
 /// its grey-level `correlation` with the template (negative counts as
 /// 0), and its colour similarity with the first model, `anchored`; and
 /// from how far its size has gone from the first box's, `size_change`
-/// (`|ln(area / first area)|`): a box that has grown over its
+/// ([`size_change`]): a box that has grown over its
 /// surroundings or shrunk onto a part of the target is more often off it.
 ///
 /// A logistic model, `1 / (1 + exp(−z))` with `z = 8.31·contrast +
@@ -46,4 +46,21 @@ pub(super) const SPEED_RATE: Real = 0.3;
 pub fn on_target(contrast: Real, correlation: Real, anchored: Real, size_change: Real) -> Real {
     let z = 8.31 * contrast + 3.06 * correlation.max(0.0) + 3.31 * anchored - 2.33 * size_change - 2.37;
     1.0 / (1.0 + exp(-z))
+}
+
+/// The confidence's size signal (see [`on_target`]): how far a box of
+/// `size` is from the `first` box's, `|ln(area / first area)|`, for sizes
+/// given as widths and heights or as half axes (only the ratio counts).
+/// 0 at the first area whatever the shape, ln 2 at twice or half of it;
+/// sizes are positive, as a tracker's are (a zero area gives infinity or
+/// NaN).
+///
+/// ```
+/// let twice = pftrack::size_change((10.0, 20.0), (20.0, 20.0));
+/// assert!((twice - 2f32.ln()).abs() < 1e-6);
+/// assert_eq!(pftrack::size_change((10.0, 20.0), (10.0, 10.0)), twice);
+/// assert_eq!(pftrack::size_change((10.0, 20.0), (20.0, 10.0)), 0.0);
+/// ```
+pub fn size_change(first: (Real, Real), size: (Real, Real)) -> Real {
+    ln((size.0 * size.1) / (first.0 * first.1)).abs()
 }

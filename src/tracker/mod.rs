@@ -22,7 +22,7 @@ use crate::histogram::{Clear, Layout, Model, PlainModel};
 use crate::region::Extents;
 use crate::scalar::{Real, sqrt};
 use crate::table::{Bins, Table};
-pub use confidence::on_target;
+pub use confidence::{on_target, size_change};
 use cues::Cues;
 pub use prior::ScalePrior;
 use rand_core::{Rng, SeedableRng};

@@ -71,11 +71,10 @@ pub(super) struct Target<const K: usize> {
 }
 
 impl<const K: usize> Target<K> {
-    /// How far half axes `(hx, hy)` are from the first box's, the
-    /// confidence's size signal: `|ln(area / first area)|`.
-    pub(super) fn size_change(&self, (hx, hy): (Real, Real)) -> Real {
-        let (ix, iy) = self.initial_axes;
-        crate::scalar::ln((hx * hy) / (ix * iy)).abs()
+    /// How far half axes are from the first box's: the confidence's size
+    /// signal.
+    pub(super) fn size_change(&self, half_axes: (Real, Real)) -> Real {
+        super::confidence::size_change(self.initial_axes, half_axes)
     }
 }
 

@@ -207,8 +207,9 @@ fn write_outputs(
             .open(path)
             .map_err(|e| format!("{}: {e}", path.display()))?;
         let mut text = String::new();
-        // The confidence's size signal, as `pftrack::on_target` takes it.
-        let first = run.boxes.first().map_or(1.0, |b| b.width * b.height);
+        // The confidence's size signal, from the boxes written (the
+        // tracker reads its ellipse's half axes: the same ratio).
+        let first = run.boxes.first().map_or((1.0, 1.0), |b| (b.width, b.height));
         for (i, ((e, d), b)) in run.estimates.iter().zip(&run.diagnostics).zip(run.boxes.iter().skip(1)).enumerate() {
             let Some(t) = truth.get(i + 1).filter(|t| has_target(t)) else { continue };
             text += &format!(
@@ -223,7 +224,7 @@ fn write_outputs(
                 d.anchored,
                 d.similarity,
                 d.psr,
-                ((b.width * b.height) / first).ln().abs(),
+                pftrack::size_change(first, (b.width, b.height)),
             );
         }
         f.write_all(text.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))?;
