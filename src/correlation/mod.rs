@@ -197,12 +197,13 @@ pub(crate) fn validate_gradient(settings: Option<GradientCue>) -> Result<(), Con
 ///
 /// Memory and time: about 12 KB of RAM in every tracker built with the
 /// feature (the read window's cells and the filter), more stack on the
-/// frames it learns, and about half as many instructions a frame again as
-/// the default (docs/performance.md). Off in
-/// [`Config::default`](crate::Config::default); beside the grey-level
-/// filter it is [`Config::accurate`](crate::Config::accurate), the most
-/// accurate configuration measured. It may also replace the grey-level
-/// filter (`correlation: None`).
+/// frames it learns, and about a third more instructions a frame than
+/// [`Config::fast`](crate::Config::fast), which leaves it off
+/// (docs/performance.md). Beside the grey-level filter it is
+/// [`Config::accurate`](crate::Config::accurate), the most accurate
+/// configuration measured and [`Config::default`](crate::Config::default)
+/// where the feature is built. It may also replace the grey-level filter
+/// (`correlation: None`).
 ///
 /// ```
 /// use pftrack::{Config, ConfigError, Error, GradientCue, ParamProblem, Tracker};
