@@ -178,8 +178,8 @@ pub struct Diagnostics {
     /// box's, or as [`crate::TemplateCue`] adapts it), in `[-1, 1]`.
     pub correlation: Real,
     /// Colour similarity of the estimate with the first model, in `[0, 1]`.
-    /// (The confidence's fourth signal, the size change, is the estimate's
-    /// area against the first box's: `|ln(area / first area)|`.)
+    /// (The confidence's fourth signal, the size change, comes from the
+    /// estimate's box: [`crate::size_change`].)
     pub anchored: Real,
     /// Similarity of the estimate with the adapted models, in `[0, 1]`.
     pub similarity: Real,

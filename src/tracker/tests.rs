@@ -101,6 +101,13 @@ fn a_soft_target_keeps_its_edge_cue() {
     assert_eq!(t.edge_threshold(), None, "no cue, no threshold");
 }
 
+/// A default tracker without the edge cue, initialised on `BOX` in `f`.
+fn learnt<const N: usize>(f: &Frame<'_>) -> Tracker<N> {
+    let mut t = Tracker::new(Config { edges: None, ..Config::default() }, 1).unwrap();
+    t.init(f, BOX).unwrap();
+    t
+}
+
 /// A grey frame of `background` with `cols` x `rows` blocks of 8x8 px
 /// from `(x0, y0)` (clipped to the frame), each grey 64 or 95 at random
 /// from `seed`, drawn row by row: both levels fall in RGB 8x8x8 bin 2.
@@ -128,9 +135,7 @@ fn the_template_term_places_a_box_that_colour_cannot() {
     // and 3 px above it, steps of 1.6 px climb back to within a step.
     let px = blocks(7, 0, (0, 0), (W / 8 + 1, H / 8 + 1));
     let f = frame(&px);
-    let cfg = Config { edges: None, ..Config::default() };
-    let mut t: Tracker<60> = Tracker::new(cfg, 1).unwrap();
-    t.init(&f, BOX).unwrap();
+    let mut t: Tracker<60> = learnt(&f);
     let Tracker { track: Track { config: cfg, target, .. }, scratch } = &mut t;
     let models = &target.as_ref().unwrap().models;
     let on = Ellipse { cx: 60.0, cy: 45.0, hx: 16.0, hy: 16.0 };
@@ -153,9 +158,7 @@ fn size_after(template: Real, steps: usize) -> Ellipse {
     // below it.
     let px = blocks(11, 100, (44, 21), (4, 6));
     let f = frame(&px);
-    let cfg = Config { edges: None, ..Config::default() };
-    let mut t: Tracker<20> = Tracker::new(cfg, 1).unwrap();
-    t.init(&f, BOX).unwrap();
+    let mut t: Tracker<20> = learnt(&f);
     let Tracker { track: Track { config: cfg, target, .. }, scratch } = &mut t;
     let models = &target.as_ref().unwrap().models;
     let search =
