@@ -283,7 +283,9 @@ pub(super) fn checker_walk<P: PixelRead, const K: usize>(
             // after the last (an even cell) may come along. They are outside
             // the ellipse, so their clamped weight is 0 and they change no
             // count; this needs their pixels on the row.
-            let (m0, m1) = (base >> 1, (base + n - 1) >> 1);
+            // Wrapping, as `base` is: a row starting left of the map gives
+            // a `base` past `cols`, refused below.
+            let (m0, m1) = (base >> 1, base.wrapping_add(n - 1) >> 1);
             let x0 = first - 2 * (base & 1) as i32;
             let pairs = m1.wrapping_sub(m0).wrapping_add(1);
             // The padded samples' pixels must be on the row, and their
