@@ -471,7 +471,11 @@ impl Config {
     /// target. The grey-level template follows the target (rate 0.05 on
     /// model-update frames, [`TemplateCue`] with weight 0) and weighs 0.3
     /// in the size search ([`SizeSearch::template`]): fewer boxes grow over
-    /// a reflection or a body below, and fewer frames miss the target. It
+    /// a reflection or a body below, and fewer frames miss the target. A
+    /// frame is a miss below a confidence of 0.7
+    /// ([`Life::Confidence`]`{ lost_below: 0.7, found_above: 0.8 }`): more
+    /// of the frames off the target are reported, for a few more good ones
+    /// reported lost, at the same accuracy. It
     /// takes about half as much RAM again as [`Config::fast`] (the
     /// gradient filter's memory is in every tracker of a build with
     /// the feature) and more instructions a frame (docs/performance.md); a
@@ -497,6 +501,7 @@ impl Config {
             correlation,
             lost_search: LostSearch::Widening { growth: 0.05 },
             size: Config::fast().size.map(|s| SizeSearch { template: 0.3, ..s }),
+            life: Life::Confidence { lost_below: 0.7, found_above: 0.8 },
             template: Some(TemplateCue { weight: 0.0, rate: 0.05 }),
             ..Config::fast()
         }

@@ -2,7 +2,7 @@
 interface.
 
     import pftrack
-    t = pftrack.Tracker(seed=1)          # settings as keywords, e.g. lost_below=0.7
+    t = pftrack.Tracker(seed=1)          # settings as keywords, e.g. lost_below=0.6
                                          # particles=25, 50, 100 (the default), 200 or 400
     t.init(frame, (x, y, w, h))          # an HxWx3 BGR (or rgb=True) or HxW uint8 array
     ok, box = t.update(next_frame)       # ok while tracking
