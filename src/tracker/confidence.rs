@@ -10,7 +10,7 @@ pub(super) const TYPICAL_CONTRAST: Real = 0.39;
 /// What the confidence of a box that moves with its surroundings is
 /// multiplied by (`Config::scene_motion`): the test is right on most of the
 /// frames it flags, and a flagged box then ranks below every box the life
-/// cycle keeps (halved, the surest is under the default's lost line, 0.6).
+/// cycle keeps (halved, the surest is under either configuration's lost line).
 /// Only the reported confidence: the cues still learn from the signals'.
 pub(super) const MOVES_WITH_SCENE: Real = 0.5;
 
