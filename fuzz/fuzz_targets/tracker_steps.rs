@@ -12,7 +12,7 @@ use rand_xoshiro::Xoshiro128PlusPlus;
 
 fn config(pick: u8) -> Config {
     let d = Config::default();
-    match pick % 14 {
+    match pick % 15 {
         0 => d,
         1 => Config { quadrants: true, binning: Binning::Rgb4x4x4, ..d },
         2 => Config { quadrants: true, binning: Binning::Adaptive, ..d },
@@ -34,6 +34,12 @@ fn config(pick: u8) -> Config {
         // Both filters and a share of the hypotheses (the learning window
         // taken from the search's cells).
         12 => Config::accurate(),
+        // The gradient filter's scale pyramid learning from every fourth
+        // frame and moving the whole way.
+        13 => Config {
+            gradient: Some(GradientCue { pyramid_pull: 1.0, pyramid_learn_above: 0.0, ..GradientCue::MEASURED }),
+            ..Config::accurate()
+        },
         _ => Config { table: Some(TableMode { spacing: 1 }), ..d },
     }
 }

@@ -127,7 +127,7 @@ pub const KEYS: &[Key] = &[
     ),
     key(
         "gradient",
-        "off | on | RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND:RELEARN_BELOW:RELEARN_ABOVE (correlation filter on gradient channels over a wide window; on = 0.2:0.7:4:0.7:0.03:0.3:3:0:4:0.8)",
+        "off | on | RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND:RELEARN_BELOW:RELEARN_ABOVE[:PYRAMID_PULL:PYRAMID_LEARN_ABOVE] (correlation filter on gradient channels over a wide window, and its scale pyramid, off when left out; on = 0.2:0.7:4:0.7:0.03:0.3:3:0:4:0.8:0.2:0.9)",
         gradient,
     ),
     key(
@@ -376,7 +376,13 @@ fn gradient(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
     c.gradient = match v.split(':').collect::<Vec<_>>().as_slice() {
         ["off"] => None,
         ["on"] => Some(pftrack::GradientCue::MEASURED),
-        [rate, above, every, pull, step, scale_pull, psr, blend, relearn_below, relearn_above] => {
+        [rate, above, every, pull, step, scale_pull, psr, blend, relearn_below, relearn_above, pyramid @ ..] => {
+            // The pyramid's fields, off when left out.
+            let (pyramid_pull, pyramid_learn_above) = match pyramid {
+                [] => (0.0, 0.0),
+                [p, a] => (num(key, p)?, num(key, a)?),
+                _ => return Err(format!("{key}: `{v}`: a scale pyramid needs PYRAMID_PULL:PYRAMID_LEARN_ABOVE")),
+            };
             Some(pftrack::GradientCue {
                 rate: num(key, rate)?,
                 learn_above: num(key, above)?,
@@ -390,11 +396,13 @@ fn gradient(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
                 blend: num(key, blend)?,
                 relearn_below: num(key, relearn_below)?,
                 relearn_above: num(key, relearn_above)?,
+                pyramid_pull,
+                pyramid_learn_above,
             })
         }
         _ => {
             return Err(format!(
-                "{key}: `{v}`: expected off, on or RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND:RELEARN_BELOW:RELEARN_ABOVE"
+                "{key}: `{v}`: expected off, on or RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND:RELEARN_BELOW:RELEARN_ABOVE[:PYRAMID_PULL:PYRAMID_LEARN_ABOVE]"
             ));
         }
     };

@@ -30,6 +30,10 @@
 //! of integer products (the cells are bytes, the filter is kept in 16 bits
 //! a channel), exact on every core and as fast without an FPU as with one.
 //!
+//! After its own scale search the cue sizes the estimate by its scale
+//! pyramid where the `scale-pyramid` feature builds it
+//! ([`super::pyramid`], [`GradientCue::pyramid_pull`]).
+//!
 //! Memory: the read window's cells as bytes ([`READ`]² x 5) and the filter
 //! (16 bits a weight and a scale per channel, [`SUPPORT`]² x 5 weights)
 //! live in the tracker; a learning frame's spectrum and energy sum live on
@@ -38,6 +42,8 @@
 use super::GradientCue;
 use super::channels::{self, CHANNELS, MAX_CELLS};
 use super::filter::{peak, round, sin, sub_cell, taper};
+#[cfg(feature = "scale-pyramid")]
+use super::pyramid::ScalePyramid;
 use crate::cue::{Cue, Freedom};
 use crate::filter::{Particle, scale_estimate, shift_estimate};
 use crate::frame::Frame;
@@ -212,6 +218,9 @@ pub(crate) struct GradientFilter {
     /// The read window's cells ([`channels::read`]'s layout); the learning
     /// window's while one is learnt.
     cells: [u8; CHANNELS * READ * READ],
+    /// The target's scale pyramid on the same channels.
+    #[cfg(feature = "scale-pyramid")]
+    pyramid: ScalePyramid,
 }
 
 /// Cell side for a box of half axes `(hx, hy)`, pixels.
@@ -304,6 +313,8 @@ impl GradientFilter {
             unlike: false,
             window: None,
             cells: [0; CHANNELS * READ * READ],
+            #[cfg(feature = "scale-pyramid")]
+            pyramid: ScalePyramid::new(),
         }
     }
 
@@ -788,8 +799,10 @@ impl Cue for GradientFilter {
         self.learned = false;
         self.waiting = 0;
         self.window = None;
-        if settings.is_some() {
+        if let Some(_c) = settings {
             self.learn(frame, e, 1.0, work);
+            #[cfg(feature = "scale-pyramid")]
+            self.pyramid.start(_c, frame, e);
         }
     }
 
@@ -860,7 +873,13 @@ impl Cue for GradientFilter {
         // The window about the estimate, where the search for the peak
         // starts (not the particles' mean, which the blend reads: the
         // estimate is measured the better centre, docs/accuracy.md).
-        let seen = self.look(frame, (ellipse.cx, ellipse.cy), (ellipse.hx, ellipse.hy), work)?;
+        let Some(seen) = self.look(frame, (ellipse.cx, ellipse.cy), (ellipse.hx, ellipse.hy), work) else {
+            #[cfg(feature = "scale-pyramid")]
+            if freedom.sizes() {
+                self.pyramid.place(c, frame, (ellipse, particles));
+            }
+            return None;
+        };
         self.unlike = seen.psr < c.relearn_below;
         if seen.psr >= c.min_psr && freedom.moves() {
             let (x, y) = (seen.centre.0 + seen.at.0, seen.centre.1 + seen.at.1);
@@ -881,6 +900,10 @@ impl Cue for GradientFilter {
                 }
             }
         }
+        #[cfg(feature = "scale-pyramid")]
+        if freedom.sizes() {
+            self.pyramid.place(c, frame, (ellipse, particles));
+        }
         Some(seen.psr)
     }
 
@@ -898,6 +921,8 @@ impl Cue for GradientFilter {
         }
         self.unlike = false;
         self.window = None;
+        #[cfg(feature = "scale-pyramid")]
+        self.pyramid.adapt(c, frame, e, confidence);
     }
 }
 

@@ -10,6 +10,8 @@ mod channels;
 mod filter;
 #[cfg(feature = "gradient")]
 mod gradient;
+#[cfg(feature = "scale-pyramid")]
+mod pyramid;
 
 #[cfg(not(all(feature = "correlation", feature = "gradient")))]
 use crate::cue::Absent;
@@ -180,7 +182,12 @@ pub(crate) fn validate_gradient(settings: Option<GradientCue>) -> Result<(), Con
     check("gradient.min_psr", c.min_psr, 0.0, 20.0)?;
     check("gradient.blend", c.blend, 0.0, 1.0)?;
     check("gradient.relearn_below", c.relearn_below, 0.0, 20.0)?;
-    check("gradient.relearn_above", c.relearn_above, 0.0, 1.0)
+    check("gradient.relearn_above", c.relearn_above, 0.0, 1.0)?;
+    check("gradient.pyramid_pull", c.pyramid_pull, 0.0, 1.0)?;
+    if c.pyramid_pull > 0.0 && !cfg!(feature = "scale-pyramid") {
+        return Err(not_built("gradient.pyramid_pull", "scale-pyramid"));
+    }
+    check("gradient.pyramid_learn_above", c.pyramid_learn_above, 0.0, 1.0)
 }
 
 /// A correlation filter on gradient channels over a wide window (the
@@ -252,6 +259,17 @@ pub struct GradientCue {
     /// peak-to-sidelobe ratio to teach the filter at once
     /// ([`GradientCue::relearn_below`]).
     pub relearn_above: Real,
+    /// The share of the way, in log size, the estimate's size moves each
+    /// frame to the size at which the target's scale pyramid matches the
+    /// frame's, in `[0, 1]` (0: no pyramid). The pyramid is the gradient
+    /// channels on a coarse lattice over a window twice the box, at
+    /// thirteen sizes 3% apart, matched at offsets of up to two sizes
+    /// (DSST's scale pyramid, matched by correlation); it takes 2,340
+    /// bytes of RAM in every tracker built with the feature.
+    pub pyramid_pull: Real,
+    /// Every fourth frame whose confidence exceeds this, in `[0, 1]`,
+    /// teaches the pyramid (a running mean at a fifth).
+    pub pyramid_learn_above: Real,
 }
 
 impl GradientCue {
@@ -275,5 +293,7 @@ impl GradientCue {
         blend: 0.0,
         relearn_below: 4.0,
         relearn_above: 0.8,
+        pyramid_pull: if cfg!(feature = "scale-pyramid") { 0.2 } else { 0.0 },
+        pyramid_learn_above: 0.9,
     };
 }

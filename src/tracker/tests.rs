@@ -596,9 +596,35 @@ fn the_gradient_filter_needs_its_feature_and_sane_settings() {
         (GradientCue { blend: Real::NAN, ..m }, "gradient.blend", ParamProblem::NonFinite),
         (GradientCue { relearn_below: -1.0, ..m }, "gradient.relearn_below", ParamProblem::OutOfRange),
         (GradientCue { relearn_above: Real::NAN, ..m }, "gradient.relearn_above", ParamProblem::NonFinite),
+        (GradientCue { pyramid_pull: 1.5, ..m }, "gradient.pyramid_pull", ParamProblem::OutOfRange),
+        (GradientCue { pyramid_pull: Real::NAN, ..m }, "gradient.pyramid_pull", ParamProblem::NonFinite),
+        (GradientCue { pyramid_learn_above: -0.5, ..m }, "gradient.pyramid_learn_above", ParamProblem::OutOfRange),
     ] {
         let err = Tracker::<10>::new(Config { gradient: Some(cue), ..Config::default() }, 1).unwrap_err();
         assert_eq!(err, Error::Config(ConfigError { field, problem }));
+    }
+}
+
+#[cfg(feature = "gradient")]
+#[test]
+fn the_scale_pyramid_is_refused_by_name_where_it_is_not_built() {
+    // Reason: the feature's contract (Cargo.toml): without it the measured
+    // settings leave the pyramid off, and asking for it names the feature.
+    use crate::GradientCue;
+    let on = GradientCue { pyramid_pull: 0.2, ..GradientCue::MEASURED };
+    let result = Tracker::<10>::new(Config { gradient: Some(on), ..Config::default() }, 1);
+    if cfg!(feature = "scale-pyramid") {
+        assert!(result.is_ok());
+        assert_eq!(GradientCue::MEASURED.pyramid_pull, 0.2);
+    } else {
+        assert_eq!(
+            result.unwrap_err(),
+            Error::Config(ConfigError {
+                field: "gradient.pyramid_pull",
+                problem: ParamProblem::NotBuilt { feature: "scale-pyramid" }
+            })
+        );
+        assert_eq!(GradientCue::MEASURED.pyramid_pull, 0.0);
     }
 }
 

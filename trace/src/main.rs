@@ -4,7 +4,7 @@
 //! on nothing but the core and the fixture codecs, so it also builds for an
 //! ARMv6 Linux device (see the README).
 //!
-//! Usage: pftrack-trace FIXTURE [SEED [pf|pf-sure|colour|meanshift|kalman|pf-gradient|pf-accurate]]
+//! Usage: pftrack-trace FIXTURE [SEED [pf|pf-sure|colour|meanshift|kalman|pf-gradient|pf-accurate|pf-accurate-no-pyramid]]
 //! (`pf`: `Config::fast`, as the firmware's default build runs it;
 //! `pf-accurate`: `Config::accurate`, the core's default)
 //!
@@ -26,7 +26,9 @@ type FwGroup = Group<3, 100>;
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let Some(path) = args.first() else {
-        eprintln!("usage: pftrack-trace FIXTURE [SEED [pf|pf-sure|colour|meanshift|kalman|pf-gradient|pf-accurate]]");
+        eprintln!(
+            "usage: pftrack-trace FIXTURE [SEED [pf|pf-sure|colour|meanshift|kalman|pf-gradient|pf-accurate|pf-accurate-no-pyramid]]"
+        );
         return ExitCode::FAILURE;
     };
     let seed = match args.get(1).map(|s| s.parse::<u64>()) {
@@ -55,12 +57,12 @@ fn run(path: &str, seed: u64, kind: &str) -> Result<(), String> {
     let h = Header::parse(&head).map_err(|e| e.to_string())?;
     let ms_config = match kind {
         "pf" | "pf-sure" | "colour" => None,
-        "pf-gradient" | "pf-accurate" => None,
+        "pf-gradient" | "pf-accurate" | "pf-accurate-no-pyramid" => None,
         "meanshift" => Some(MeanShiftConfig::default()),
         "kalman" => Some(MeanShiftConfig::kalman()),
         _ => {
             return Err(format!(
-                "tracker `{kind}` is not pf, pf-sure, colour, meanshift, kalman, pf-gradient or pf-accurate"
+                "tracker `{kind}` is not pf, pf-sure, colour, meanshift, kalman, pf-gradient, pf-accurate or pf-accurate-no-pyramid"
             ));
         }
     };
@@ -75,6 +77,13 @@ fn run(path: &str, seed: u64, kind: &str) -> Result<(), String> {
         "pf-gradient" => Config { gradient: Some(pftrack::GradientCue::MEASURED), correlation: None, ..Config::fast() },
         // As the firmware's `pf-accurate` tracker.
         "pf-accurate" => Config::accurate(),
+        // As the firmware's `pf-accurate` tracker in a build without the
+        // core's `scale-pyramid` feature (its `gradient` feature alone).
+        "pf-accurate-no-pyramid" => {
+            let accurate = Config::accurate();
+            let gradient = accurate.gradient.map(|g| pftrack::GradientCue { pyramid_pull: 0.0, ..g });
+            Config { gradient, ..accurate }
+        }
         _ => Config::fast(),
     };
     if h.targets > 1 {
