@@ -262,10 +262,10 @@ pub struct GradientCue {
     /// The share of the way, in log size, the estimate's size moves each
     /// frame to the size at which the target's scale pyramid matches the
     /// frame's, in `[0, 1]` (0: no pyramid). The pyramid is the gradient
-    /// channels on a coarse lattice over a window twice the box, at
+    /// channels on a 5 x 5-cell lattice over a window twice the box, at
     /// thirteen sizes 3% apart, matched at offsets of up to two sizes
-    /// (DSST's scale pyramid, matched by correlation); it takes 2,340
-    /// bytes of RAM in every tracker built with the feature.
+    /// (DSST's scale pyramid, matched by correlation; the `scale-pyramid`
+    /// feature): 1,625 bytes of RAM in every tracker built with it.
     pub pyramid_pull: Real,
     /// Every fourth frame whose confidence exceeds this, in `[0, 1]`,
     /// teaches the pyramid (a running mean at a fifth).
@@ -281,7 +281,10 @@ impl GradientCue {
     /// similarities (a 0.3 share loses 0.04 on the check split), and a
     /// frame more confident than 0.8 (the life cycle's default
     /// `found_above`) whose PSR is under 4 learnt at once (a turning target
-    /// followed; the real sequences unchanged within their seeds' noise).
+    /// followed; the real sequences unchanged within their seeds' noise);
+    /// where the `scale-pyramid` feature is built, the scale pyramid moving
+    /// the size a fifth of the way each frame and learning from frames more
+    /// confident than 0.9 (off, 0, where it is not).
     pub const MEASURED: GradientCue = GradientCue {
         rate: 0.2,
         learn_above: 0.7,

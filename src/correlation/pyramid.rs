@@ -36,7 +36,7 @@ use crate::geometry::Ellipse;
 use crate::scalar::{Real, exp, sqrt};
 
 /// Cells per side of each column's lattice.
-pub const CELLS: usize = 6;
+pub const CELLS: usize = 5;
 /// Sizes in the pyramid (odd: the middle one is the box's).
 pub const SIZES: usize = 13;
 /// The relative step between neighbouring sizes.
@@ -51,8 +51,16 @@ const COLUMN: usize = CHANNELS * CELLS * CELLS;
 /// unit length is a fifth of its column's energy, so a cell of it is at
 /// most `1 / √5` long, `Q / √5` is 127.
 const Q: Real = 284.0;
-/// A multiple of every offset's count of overlapping columns.
-const OVERLAPS: i32 = 11 * 12 * 13;
+/// A multiple of every offset's count of overlapping columns
+/// (`SIZES − |k|`, `k` up to `REACH`): their product.
+const OVERLAPS: i32 = {
+    let (mut p, mut k) = (1, 0);
+    while k <= REACH {
+        p *= (SIZES - k) as i32;
+        k += 1;
+    }
+    p
+};
 /// Sure frames between two that the pyramid learns from.
 const LEARN_EVERY: u8 = 4;
 
@@ -174,7 +182,7 @@ impl ScalePyramid {
             }
         }
         // The mean over each offset's overlapping columns (`SIZES − |k|`),
-        // times 11 · 12 · 13, in integers; no offset unless another agrees
+        // times OVERLAPS, in integers; no offset unless another agrees
         // better (a flat window agrees with nothing).
         for (i, a) in agree.iter_mut().enumerate() {
             *a *= OVERLAPS / (SIZES - i.abs_diff(REACH)) as i32;
@@ -234,7 +242,7 @@ const LN_STEP: Real = 0.029_558_802;
 // OVERLAPS is a multiple of every overlap, and an offset's mean (a column's
 // products are at most about Q², the columns of unit length) times it fits
 // 32 bits.
-const _: () = assert!(SIZES == 13 && REACH == 2);
+const _: () = assert!(REACH < SIZES / 2);
 const _: () = assert!((2.0 * Q * Q) as i64 * OVERLAPS as i64 <= i32::MAX as i64);
 
 // A channel's energy, `Σ (PLANE · c − Σ c)²`, fits the 32 bits it is
