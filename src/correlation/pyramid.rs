@@ -142,8 +142,9 @@ impl ScalePyramid {
 
     /// Reads the pyramid about `e` and takes it (`fresh`) or moves the
     /// learnt one a fifth of the way to it. False where a column could not
-    /// be read (the learnt pyramid is then partly moved: the caller's
-    /// target is refused or kept as it was learnt).
+    /// be read, which `channels::read` does only for lattices larger than
+    /// its own (never these): a fresh pyramid is then not counted as
+    /// learnt.
     #[inline(never)]
     fn learn(&mut self, frame: &Frame<'_>, e: &Ellipse, fresh: bool) -> bool {
         let mut col = [0i8; COLUMN];
