@@ -255,11 +255,30 @@ pub(crate) fn frame_buffer() -> Option<&'static mut [u8; FRAME_BYTES]> {
 
 /// The one static every kind of particle-filter tracker is built into (a
 /// run builds one): a static per kind would take a tracker's RAM once for
-/// every kind the build has. Inlined into each `make_*`, so that the
-/// tracker is moved once, from the constructor's result into the static.
+/// every kind the build has. The constructor's whole result is moved into
+/// it and the tracker used where it lies: a tracker taken out of its
+/// `Result` first, or passed through `cortex_m::singleton!`, is one or two
+/// more copies of it on the stack, more than the STM32F405 has room for.
+/// Inlined into each `make_*` with its constructor, so that each
+/// configuration is known at compile time and its validation folds away.
 #[inline(always)]
-fn keep(t: FwTracker) -> Option<&'static mut FwTracker> {
-    cortex_m::singleton!(: FwTracker = t)
+fn keep(
+    made: impl FnOnce() -> Result<FwTracker, pftrack::Error>,
+) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
+    static mut TRACKER: core::mem::MaybeUninit<Result<FwTracker, pftrack::Error>> = core::mem::MaybeUninit::uninit();
+    static mut TAKEN: bool = false;
+    // SAFETY: `TAKEN` is read and set with interrupts off, so `TRACKER` is
+    // written, and handed out, once.
+    let first =
+        cortex_m::interrupt::free(|_| unsafe { !core::mem::replace(&mut *core::ptr::addr_of_mut!(TAKEN), true) });
+    if !first {
+        return Ok(None);
+    }
+    // SAFETY: only this call, the first, reaches here (above).
+    match unsafe { (*core::ptr::addr_of_mut!(TRACKER)).write(made()) } {
+        Ok(t) => Ok(Some(t)),
+        Err(e) => Err(*e),
+    }
 }
 
 /// Builds the tracker into a static. Kept out of line: constructing it needs
@@ -270,8 +289,7 @@ fn make_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Er
     // The configuration for boards that need the frame rate: with the
     // correlation filter where the build has it (the default), the colour
     // cues alone where it does not.
-    let t = FwTracker::new(Config::fast(), seed)?;
-    Ok(keep(t))
+    keep(|| FwTracker::new(Config::fast(), seed))
 }
 
 /// [`make_tracker`] with the surroundings-motion test off, in the build with
@@ -281,8 +299,7 @@ fn make_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Er
 #[cfg(feature = "all-options")]
 #[inline(never)]
 fn make_still_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
-    let t = FwTracker::new(Config { scene_motion: false, ..Config::fast() }, seed)?;
-    Ok(keep(t))
+    keep(|| FwTracker::new(Config { scene_motion: false, ..Config::fast() }, seed))
 }
 
 /// [`make_tracker`] observing [`SURE_SHARE`] of the hypotheses after a
@@ -291,8 +308,7 @@ fn make_still_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftra
 #[cfg(feature = "all-options")]
 #[inline(never)]
 fn make_sure_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
-    let t = FwTracker::new(Config { sure_share: SURE_SHARE, ..Config::fast() }, seed)?;
-    Ok(keep(t))
+    keep(|| FwTracker::new(Config { sure_share: SURE_SHARE, ..Config::fast() }, seed))
 }
 
 /// [`make_tracker`] with the gradient filter in place of the grey-level
@@ -302,8 +318,7 @@ fn make_sure_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrac
 #[inline(never)]
 fn make_gradient_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
     let config = Config { gradient: Some(pftrack::GradientCue::MEASURED), correlation: None, ..Config::fast() };
-    let t = FwTracker::new(config, seed)?;
-    Ok(keep(t))
+    keep(|| FwTracker::new(config, seed))
 }
 
 /// [`make_tracker`] with `Config::accurate` (the gradient filter beside
@@ -311,8 +326,7 @@ fn make_gradient_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pf
 #[cfg(feature = "gradient")]
 #[inline(never)]
 fn make_accurate_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
-    let t = FwTracker::new(Config::accurate(), seed)?;
-    Ok(keep(t))
+    keep(|| FwTracker::new(Config::accurate(), seed))
 }
 
 /// The share of hypotheses the audit's `pf-sure` trackers and groups observe
