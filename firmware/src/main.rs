@@ -16,6 +16,7 @@
 mod board;
 mod group;
 mod host;
+mod tracker_slot;
 
 use core::fmt::Write;
 use cortex_m::peripheral::syst::SystClkSource;
@@ -24,16 +25,14 @@ use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
 use cortex_m_semihosting::hio;
 #[cfg(feature = "defmt")]
 use defmt_semihosting as _;
-use pftrack::{BoundingBox, Config, Estimate, Frame, MeanShift, MeanShiftConfig, Tracker};
+use pftrack::{BoundingBox, Config, Estimate, Frame, MeanShift, MeanShiftConfig};
 
 use board::FRAME_BYTES;
+use tracker_slot::{FwTracker, keep};
 /// Most frames whose instruction counts are kept for the median.
 const MAX_FRAMES: usize = 512;
 /// The value the unused stack is painted with.
 const PAINT: u32 = 0x5afe_c0de;
-
-/// The tracker lives in a static, not on the stack: it is the largest object.
-type FwTracker = Tracker<100>;
 
 /// The tracker this run uses, in its static.
 enum Any {
@@ -251,34 +250,6 @@ pub(crate) fn frame_buffer() -> Option<&'static mut [u8; FRAME_BYTES]> {
             Some(&mut *p.cast::<[u8; FRAME_BYTES]>())
         }
     })
-}
-
-/// The one static every kind of particle-filter tracker is built into (a
-/// run builds one): a static per kind would take a tracker's RAM once for
-/// every kind the build has. The constructor's whole result is moved into
-/// it and the tracker used where it lies: a tracker taken out of its
-/// `Result` first, or passed through `cortex_m::singleton!`, is one or two
-/// more copies of it on the stack, more than the STM32F405 has room for.
-/// Inlined into each `make_*` with its constructor, so that each
-/// configuration is known at compile time and its validation folds away.
-#[inline(always)]
-fn keep(
-    made: impl FnOnce() -> Result<FwTracker, pftrack::Error>,
-) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
-    static mut TRACKER: core::mem::MaybeUninit<Result<FwTracker, pftrack::Error>> = core::mem::MaybeUninit::uninit();
-    static mut TAKEN: bool = false;
-    // SAFETY: `TAKEN` is read and set with interrupts off, so `TRACKER` is
-    // written, and handed out, once.
-    let first =
-        cortex_m::interrupt::free(|_| unsafe { !core::mem::replace(&mut *core::ptr::addr_of_mut!(TAKEN), true) });
-    if !first {
-        return Ok(None);
-    }
-    // SAFETY: only this call, the first, reaches here (above).
-    match unsafe { (*core::ptr::addr_of_mut!(TRACKER)).write(made()) } {
-        Ok(t) => Ok(Some(t)),
-        Err(e) => Err(*e),
-    }
 }
 
 /// Builds the tracker into a static. Kept out of line: constructing it needs

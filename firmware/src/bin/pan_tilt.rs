@@ -29,6 +29,8 @@ compile_error!("the pan-tilt example has no RP2040 servos: build the RP2040 firm
 mod board;
 #[path = "../host.rs"]
 mod host;
+#[path = "../tracker_slot.rs"]
+mod tracker_slot;
 
 use board::{DutyReadback, FRAME_BYTES, LevelReadback};
 use core::fmt::Write;
@@ -36,7 +38,8 @@ use cortex_m_rt::entry;
 use cortex_m_semihosting::debug::{self, EXIT_FAILURE, EXIT_SUCCESS};
 use cortex_m_semihosting::hio;
 use pftrack::follower::{FollowerConfig, PanTilt};
-use pftrack::{Config, Frame, TrackState, Tracker};
+use pftrack::{Config, Frame, TrackState};
+use tracker_slot::{FwTracker, keep};
 
 #[entry]
 fn main() -> ! {
@@ -70,7 +73,11 @@ fn run() -> bool {
         fail!("frames of {} bytes do not fit {FRAME_BYTES}", h.frame_len());
     }
     let Some(pixels) = cortex_m::singleton!(: [u8; FRAME_BYTES] = [0; FRAME_BYTES]) else { fail!("buffer taken") };
-    let Some(tracker) = make_tracker(seed) else { fail!("tracker") };
+    let tracker = match make_tracker(seed) {
+        Ok(Some(t)) => t,
+        Ok(None) => fail!("tracker taken"),
+        Err(e) => fail!("{e}"),
+    };
     let Some((pan, tilt, led)) = board::head() else { fail!("peripherals taken") };
     let mut head = match PanTilt::new(pan, tilt, led, FollowerConfig::default()) {
         Ok(head) => head,
@@ -137,10 +144,11 @@ fn run() -> bool {
     followed
 }
 
+/// Builds the tracker into its static; out of line, so that the stack the
+/// construction takes is gone before the loop.
 #[inline(never)]
-fn make_tracker(seed: u64) -> Option<&'static mut Tracker<100>> {
-    let t = Tracker::<100>::new(Config::default(), seed).ok()?;
-    cortex_m::singleton!(: Tracker<100> = t)
+fn make_tracker(seed: u64) -> Result<Option<&'static mut FwTracker>, pftrack::Error> {
+    keep(|| FwTracker::new(Config::default(), seed))
 }
 
 #[panic_handler]
