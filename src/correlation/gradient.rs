@@ -516,6 +516,44 @@ impl GradientFilter {
         self.response(cells, N, &reading, (N / 2 - HALF) as i32, (N / 2 - HALF) as i32)
     }
 
+    /// Moves the estimate `pull` of the way to the response's peak, and
+    /// scales it towards the best of three cell sizes, when the response
+    /// has a clear peak; the response's PSR, `None` where there is none.
+    fn steer<const N: usize>(
+        &mut self,
+        c: &GradientCue,
+        frame: &Frame<'_>,
+        (ellipse, particles): (&mut Ellipse, &mut [Particle; N]),
+        freedom: Freedom,
+        work: &mut [u16],
+    ) -> Option<Real> {
+        // The window about the estimate, where the search for the peak
+        // starts (not the particles' mean, which the blend reads: the
+        // estimate is measured the better centre, docs/accuracy.md).
+        let seen = self.look(frame, (ellipse.cx, ellipse.cy), (ellipse.hx, ellipse.hy), work)?;
+        self.unlike = seen.psr < c.relearn_below;
+        if seen.psr >= c.min_psr && freedom.moves() {
+            let (x, y) = (seen.centre.0 + seen.at.0, seen.centre.1 + seen.at.1);
+            let (dx, dy) = (c.pull * (x - ellipse.cx), c.pull * (y - ellipse.cy));
+            shift_estimate(ellipse, particles, (dx, dy), frame);
+            if c.scale_step > 0.0 && freedom.sizes() {
+                let mut best = None;
+                for s in [1.0, 1.0 + c.scale_step, 1.0 / (1.0 + c.scale_step)] {
+                    if let Some(r) = self.at_scale(frame, (ellipse, seen.cell, s), work)
+                        && best.is_none_or(|(b, _)| r > b)
+                    {
+                        best = Some((r, s));
+                    }
+                }
+                if let Some((_, s)) = best {
+                    let f = 1.0 + c.scale_pull * (s - 1.0);
+                    scale_estimate(ellipse, particles, (f, f));
+                }
+            }
+        }
+        Some(seen.psr)
+    }
+
     /// Learns the window around `e` at `rate` (the first window is learnt
     /// whole, whatever the rate), its temporaries in `work` ([`room`]).
     fn learn(&mut self, frame: &Frame<'_>, e: &Ellipse, rate: Real, work: &mut [u16]) {
@@ -859,9 +897,8 @@ impl Cue for GradientFilter {
         }
     }
 
-    /// Moves the estimate `pull` of the way to the response's peak, and
-    /// scales it towards the best of three cell sizes, when the response
-    /// has a clear peak.
+    /// [`GradientFilter::steer`], then, where the estimate may be sized,
+    /// the scale pyramid's sizing, whether or not the response had a peak.
     fn place<const N: usize>(
         &mut self,
         c: &GradientCue,
@@ -870,41 +907,12 @@ impl Cue for GradientFilter {
         freedom: Freedom,
         work: &mut [u16],
     ) -> Option<Real> {
-        // The window about the estimate, where the search for the peak
-        // starts (not the particles' mean, which the blend reads: the
-        // estimate is measured the better centre, docs/accuracy.md).
-        let Some(seen) = self.look(frame, (ellipse.cx, ellipse.cy), (ellipse.hx, ellipse.hy), work) else {
-            #[cfg(feature = "scale-pyramid")]
-            if freedom.sizes() {
-                self.pyramid.place(c, frame, (ellipse, particles));
-            }
-            return None;
-        };
-        self.unlike = seen.psr < c.relearn_below;
-        if seen.psr >= c.min_psr && freedom.moves() {
-            let (x, y) = (seen.centre.0 + seen.at.0, seen.centre.1 + seen.at.1);
-            let (dx, dy) = (c.pull * (x - ellipse.cx), c.pull * (y - ellipse.cy));
-            shift_estimate(ellipse, particles, (dx, dy), frame);
-            if c.scale_step > 0.0 && freedom.sizes() {
-                let mut best = None;
-                for s in [1.0, 1.0 + c.scale_step, 1.0 / (1.0 + c.scale_step)] {
-                    if let Some(r) = self.at_scale(frame, (ellipse, seen.cell, s), work)
-                        && best.is_none_or(|(b, _)| r > b)
-                    {
-                        best = Some((r, s));
-                    }
-                }
-                if let Some((_, s)) = best {
-                    let f = 1.0 + c.scale_pull * (s - 1.0);
-                    scale_estimate(ellipse, particles, (f, f));
-                }
-            }
-        }
+        let psr = self.steer(c, frame, (&mut *ellipse, &mut *particles), freedom, work);
         #[cfg(feature = "scale-pyramid")]
         if freedom.sizes() {
             self.pyramid.place(c, frame, (ellipse, particles));
         }
-        Some(seen.psr)
+        psr
     }
 
     /// Learns on every `learn_every`-th confident frame at its own rate:
