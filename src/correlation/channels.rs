@@ -69,40 +69,53 @@ pub(crate) fn read(frame: &Frame<'_>, centre: (Real, Real), cell: (Real, Real), 
         }
         if i % POINTS == POINTS - 1 {
             let r = i / POINTS;
-            for (cc, g) in grey.iter_mut().enumerate().take(n) {
-                if let Some(o) = out.get_mut(r * n + cc) {
-                    *o = LOG_GREY.get(((*g + per / 2) / per) as usize).copied().unwrap_or(0);
-                }
+            let row = out.get_mut(r * n..(r + 1) * n).unwrap_or(&mut []);
+            for (o, g) in row.iter_mut().zip(grey.iter_mut()) {
+                // The mean of four lumas is a byte.
+                *o = LOG_GREY.get(((*g + per / 2) / per) as u8 as usize).copied().unwrap_or(0);
                 *g = 0;
             }
         }
     }
     // Then the orientations, from the grey cells' central differences
     // (edge cells repeat): gradients of log-luma, so that an edge's
-    // strength is its contrast, whatever the light.
+    // strength is its contrast, whatever the light. Row by row, each
+    // plane's row taken once.
     let (grey, rest) = out.split_at_mut(plane);
-    let g = |r: usize, c: usize| grey.get(r.min(n - 1) * n + c.min(n - 1)).copied().unwrap_or(0) as i32;
-    for r in 0..n {
-        for c in 0..n {
-            let gx = g(r, c + 1) - g(r, c.saturating_sub(1));
-            let gy = g(r + 1, c) - g(r.saturating_sub(1), c);
-            let i = r * n + c;
-            let (bin, f, m) = orientation(gx, gy).unwrap_or((0, 0, 0));
+    let mut planes = rest.chunks_exact_mut(plane);
+    let (Some(p0), Some(p1), Some(p2), Some(p3)) = (planes.next(), planes.next(), planes.next(), planes.next()) else {
+        return true;
+    };
+    let row = |r: usize| grey.get(r * n..(r + 1) * n).unwrap_or(&[]);
+    for (r, (((o0, o1), o2), o3)) in p0
+        .chunks_exact_mut(n)
+        .zip(p1.chunks_exact_mut(n))
+        .zip(p2.chunks_exact_mut(n))
+        .zip(p3.chunks_exact_mut(n))
+        .enumerate()
+    {
+        let (up, mid, down) = (row(r.saturating_sub(1)), row(r), row((r + 1).min(n - 1)));
+        // The cells left of and at the current one (the first repeats).
+        let first = mid.first().copied().unwrap_or(0);
+        let (mut left, mut centre) = (first, first);
+        for (c, (((((o0, o1), o2), o3), &u), &d)) in
+            o0.iter_mut().zip(o1.iter_mut()).zip(o2.iter_mut()).zip(o3.iter_mut()).zip(up).zip(down).enumerate()
+        {
+            // The last repeats.
+            let right = mid.get(c + 1).copied().unwrap_or(centre);
+            let (gx, gy) = (right as i32 - left as i32, d as i32 - u as i32);
+            (left, centre) = (centre, right);
             // The length shared between the two bins the orientation falls
-            // between; the other bins get none.
-            let mut shares = [0u8; ORIENTATIONS];
-            let share = |part: u32| ((m * part + 32_768) >> 16).min(255) as u8;
-            if let Some(s) = shares.get_mut(bin) {
-                *s = share(256 - f);
-            }
-            if let Some(s) = shares.get_mut((bin + 1) % ORIENTATIONS) {
-                *s = share(f);
-            }
-            for (k, &s) in shares.iter().enumerate() {
-                if let Some(o) = rest.get_mut(k * plane + i) {
-                    *o = s;
+            // between (a byte each, bin `k` in byte `k`); the other bins
+            // get none.
+            let shares = match orientation(gx, gy) {
+                Some((bin, f, m)) => {
+                    let share = |part: u32| ((m * part + 32_768) >> 16).min(255);
+                    (share(256 - f) << (8 * bin)) | (share(f) << (8 * ((bin + 1) % ORIENTATIONS)))
                 }
-            }
+                None => 0,
+            };
+            [*o0, *o1, *o2, *o3] = shares.to_le_bytes();
         }
     }
     true
@@ -239,12 +252,8 @@ impl RowReader for PointRow<'_, '_> {
     const LOOPS: Loops = Loops::camera_luma(Loop::Always);
 
     fn rows_of<P: PixelRead>(self) {
-        let Some(px) = P::pixels(self.row) else { return };
-        let luma = |x: usize| px.get(x).map_or(0, |&p| P::px_luma(p)) as u16;
-        for (g, pair) in self.grey.iter_mut().zip(self.columns.chunks_exact(POINTS)) {
-            if let [a, b] = *pair {
-                *g += luma(a) + luma(b);
-            }
+        if let Some(px) = P::pixels(self.row) {
+            add_points::<P>(px, self.columns, self.grey);
         }
     }
 
@@ -255,6 +264,19 @@ impl RowReader for PointRow<'_, '_> {
             if let [a, b] = *pair {
                 *g += luma(a) + luma(b);
             }
+        }
+    }
+}
+
+/// Adds the lumas of the pixels `px` at `columns`, each pair of points to
+/// its cell's sum in `grey`. Out of line: inside [`read`] the loop's
+/// pointers spill to the stack.
+#[inline(never)]
+fn add_points<P: PixelRead>(px: &[P::Px], columns: &[usize], grey: &mut [u16; MAX_CELLS]) {
+    let luma = |x: usize| px.get(x).map_or(0, |&p| P::px_luma(p)) as u16;
+    for (g, pair) in grey.iter_mut().zip(columns.chunks_exact(POINTS)) {
+        if let [a, b] = *pair {
+            *g += luma(a) + luma(b);
         }
     }
 }
