@@ -36,8 +36,10 @@
 //!
 //! Memory: the read window's cells as bytes ([`READ`]² x 5) and the filter
 //! (16 bits a weight and a scale per channel, [`SUPPORT`]² x 5 weights)
-//! live in the tracker; a learning frame's spectrum and energy sum live on
-//! the stack while it learns (docs/performance.md).
+//! live in the tracker; a learning frame's spectrum, energy sum and cut
+//! filter live in memory the tracker lends (its foreground map's), and a
+//! second spectrum in the read window's cells past the learning window's,
+//! free while it learns (docs/performance.md).
 
 use super::GradientCue;
 use super::channels::{self, CHANNELS, MAX_CELLS};
@@ -559,24 +561,47 @@ impl GradientFilter {
     fn learn(&mut self, frame: &Frame<'_>, e: &Ellipse, rate: Real, work: &mut [u16]) {
         let Some(Room { spectrum, gain, cut }) = room(work) else { return };
         let cell = cell_size((e.hx, e.hy));
-        let lattice = match self.window.take().and_then(|w| within(w, e, cell)) {
-            Some((top, left)) => Lattice { cells: &self.cells, side: READ, top, left, n: LEARN },
+        // The learning window's cells at the front of `cells`, whole: moved
+        // there from this frame's read window where it lies within it, read
+        // afresh where not. The rest of `cells` is then free until the next
+        // frame reads (see `held`).
+        match self.window.take().and_then(|w| within(w, e, cell)) {
+            Some((top, left)) => {
+                for k in 0..CHANNELS {
+                    for r in 0..LEARN {
+                        // Each row moves to an index no later than its own
+                        // and no later row's: nothing unread is overwritten.
+                        let from = (k * READ + top + r) * READ + left;
+                        if from + LEARN <= self.cells.len() {
+                            self.cells.copy_within(from..from + LEARN, (k * LEARN + r) * LEARN);
+                        }
+                    }
+                }
+            }
             None => {
                 let Some(cells) = self.cells.get_mut(..CHANNELS * LEARN * LEARN) else { return };
                 if !channels::read(frame, (e.cx, e.cy), cell, LEARN, cells) {
                     return;
                 }
-                Lattice::whole(cells, LEARN)
             }
-        };
+        }
+        let (cells, rest) = self.cells.split_at_mut(CHANNELS * LEARN * LEARN);
+        let lattice = Lattice::whole(cells, LEARN);
         let Some(norm) = normalise(lattice, Some(&TAPER)) else { return };
         // Each channel is transformed twice (once for the energy sum, once
-        // for its own solve) rather than all kept, so that one spectrum is
-        // held at a time; all but the last. `transform` writes every bin.
+        // for its own solve) rather than all kept, so that at most two
+        // spectra are held at a time: all but the last two, which are
+        // still held (the one before the last in the free cells).
+        let mut held = held(rest);
+        let kept = if held.is_some() { 2 } else { 1 };
         for col in gain.iter_mut() {
             col.fill(LAMBDA);
         }
         for k in 0..CHANNELS {
+            let spectrum = match held.as_deref_mut() {
+                Some(h) if k + 2 == CHANNELS => h,
+                _ => &mut *spectrum,
+            };
             transform(spectrum, lattice, &norm, k);
             for (gain, col) in gain.iter_mut().zip(spectrum.iter()) {
                 for (e, x) in gain.iter_mut().zip(col.iter()) {
@@ -595,9 +620,13 @@ impl GradientFilter {
         for row in cut.iter_mut() {
             row.fill(0.0);
         }
-        // The last channel transformed is still in `spectrum`: solved first.
-        for k in (0..CHANNELS).rev().take(1).chain(0..CHANNELS - 1) {
-            if k + 1 < CHANNELS {
+        // The channels still held are solved first.
+        for k in (0..CHANNELS).rev().take(kept).chain(0..CHANNELS - kept) {
+            let spectrum = match held.as_deref_mut() {
+                Some(h) if k + 2 == CHANNELS => h,
+                _ => &mut *spectrum,
+            };
+            if k + kept < CHANNELS {
                 transform(spectrum, lattice, &norm, k);
             }
             solve(spectrum, gain, cut);
@@ -627,6 +656,18 @@ fn room(work: &mut [u16]) -> Option<Room<'_>> {
     let (cut, _) = super::carve::<[Real; SUPPORT], SUPPORT>(rest)?;
     Some(Room { spectrum, gain, cut })
 }
+
+/// A second spectrum for the learning, in the read window's cells past
+/// the learning window's (free while it learns), from its first address a
+/// spectrum may start at; `None` where it does not fit.
+fn held(cells: &mut [u8]) -> Option<&mut Spectrum> {
+    let start = cells.as_ptr().align_offset(align_of::<Spectrum>());
+    let bytes = cells.get_mut(start..start.checked_add(size_of::<Spectrum>())?)?;
+    bytemuck::try_from_bytes_mut(bytes).ok()
+}
+
+// The read window's cells hold a spectrum past the learning window's.
+const _: () = assert!(CHANNELS * (READ * READ - LEARN * LEARN) >= size_of::<Spectrum>() + align_of::<Spectrum>());
 
 /// The filter pooled 2 x 2, as the coarse search reads it.
 type PooledWeights = [[[i32; POOLED_SUPPORT]; POOLED_SUPPORT]; CHANNELS];
