@@ -332,6 +332,45 @@ mod tests {
     }
 
     #[test]
+    fn the_orientations_are_each_cells_from_its_clamped_neighbours() {
+        // Reason: a cross-check with the definition written cell by cell:
+        // each cell's orientation shares come from `orientation` of the
+        // central differences of its grey neighbours, an edge cell's
+        // missing neighbour being itself, the length's share of the lower
+        // bin `256 - f` and of the next `f` 256ths (rounded, at most 255).
+        // On a noisy frame (every orientation and length), for lattices of
+        // 1, 2 and 13 cells and the largest.
+        let (w, h) = (97, 83);
+        let mut state = 12_345u32;
+        let px: Vec<u8> = (0..w * h)
+            .map(|_| {
+                state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                (state >> 24) as u8
+            })
+            .collect();
+        let frame = Frame::packed(&px, w, h, PixelFormat::Gray8).unwrap();
+        for n in [1, 2, 13, MAX_CELLS] {
+            let mut out = vec![0u8; CHANNELS * n * n];
+            assert!(read(&frame, (48.3, 41.7), (1.6, 1.4), n, &mut out));
+            let g = |r: usize, c: usize| out[r.min(n - 1) * n + c.min(n - 1)] as i32;
+            for r in 0..n {
+                for c in 0..n {
+                    let gx = g(r, c + 1) - g(r, c.saturating_sub(1));
+                    let gy = g(r + 1, c) - g(r.saturating_sub(1), c);
+                    let mut want = [0u8; ORIENTATIONS];
+                    if let Some((bin, f, m)) = orientation(gx, gy) {
+                        let share = |part: u32| ((m * part + 32_768) >> 16).min(255) as u8;
+                        want[bin] = share(256 - f);
+                        want[(bin + 1) % ORIENTATIONS] = share(f);
+                    }
+                    let got: Vec<u8> = (0..ORIENTATIONS).map(|k| out[((k + 1) * n + r) * n + c]).collect();
+                    assert_eq!(got, want, "{n} cells, cell ({r}, {c})");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn a_vertical_edge_fills_the_horizontal_gradient_bins_only() {
         // Reason: a step from dark to light along x has gradients along x
         // (0°), which lie half in bin 3 (centred on 157.5°, wrapping) and

@@ -1205,6 +1205,22 @@ mod tests {
     }
 
     #[test]
+    fn the_cells_past_the_learning_window_hold_a_spectrum() {
+        // Reason: the learning transforms a channel fewer only where the
+        // read window's free cells hold a whole spectrum from an aligned
+        // address; `held` finds one in any part of them at least a
+        // spectrum and an alignment long, and none in a shorter one.
+        let mut f = GradientFilter::new();
+        let free = &mut f.cells[CHANNELS * LEARN * LEARN..];
+        assert!(held(free).is_some());
+        for skip in 0..4 {
+            assert!(held(&mut free[skip..]).is_some(), "from byte {skip}");
+        }
+        let short = size_of::<Spectrum>() - 1;
+        assert!(held(&mut free[..short]).is_none());
+    }
+
+    #[test]
     fn a_flat_frame_teaches_nothing_and_answers_nothing() {
         // Reason: a window of one grey level has no energy to normalise
         // (the invariant `normalise` guards).
