@@ -23,7 +23,7 @@
 use super::filter::ln_1p;
 use crate::frame::Frame;
 use crate::pixel::{self, Loop, Loops, PixelRead, RowReader};
-use crate::scalar::{Real, clamp};
+use crate::scalar::Real;
 
 /// Unsigned gradient orientations: channels 1 to `ORIENTATIONS`.
 pub(crate) const ORIENTATIONS: usize = 4;
@@ -47,13 +47,20 @@ pub(crate) fn read(frame: &Frame<'_>, centre: (Real, Real), cell: (Real, Real), 
     if n == 0 || n > MAX_CELLS || out.len() < CHANNELS * n * n {
         return false;
     }
-    let (xmax, ymax) = (frame.width().saturating_sub(1) as Real, frame.height().saturating_sub(1) as Real);
-    let step = (cell.0 / POINTS as Real, cell.1 / POINTS as Real);
-    let at =
-        |i: usize, c: Real, step: Real, max: Real| clamp(c + (i as Real + 0.5 - n as Real) * step, 0.0, max) as usize;
+    let (xmax, ymax) = (frame.width().saturating_sub(1), frame.height().saturating_sub(1));
+    // Point `i` lies `i + ½ − n` steps from the centre: that many half
+    // steps, an odd whole number, times half a step (both exact, so the
+    // product rounds as `(i + ½ − n) · step` would).
+    let half = (0.5 * cell.0 / POINTS as Real, 0.5 * cell.1 / POINTS as Real);
+    // Clamped to the frame as a whole number: the conversion takes what
+    // lies before the frame (and NaN) to 0, the `min` what lies past it to
+    // the last pixel.
+    let at = |i: usize, c: Real, half: Real, max: usize| {
+        ((c + (2 * i as i32 + 1 - 2 * n as i32) as Real * half) as usize).min(max)
+    };
     let mut columns = [0usize; MAX_POINTS];
     for (j, x) in columns.iter_mut().enumerate().take(points) {
-        *x = at(j, centre.0, step.0, xmax);
+        *x = at(j, centre.0, half.0, xmax);
     }
     let columns = columns.get(..points).unwrap_or(&[]);
     // Grey first: each cell the mean of its 2 x 2 points' lumas, as
@@ -62,7 +69,7 @@ pub(crate) fn read(frame: &Frame<'_>, centre: (Real, Real), cell: (Real, Real), 
     let plane = n * n;
     let per = (POINTS * POINTS) as u16;
     for i in 0..points {
-        let y = at(i, centre.1, step.1, ymax);
+        let y = at(i, centre.1, half.1, ymax);
         if let Some(pixels) = frame.row(y) {
             // One format dispatch per row, not per pixel.
             pixel::read(frame.format(), PointRow { frame, row: pixels, columns, grey: &mut grey });
@@ -81,19 +88,21 @@ pub(crate) fn read(frame: &Frame<'_>, centre: (Real, Real), cell: (Real, Real), 
     // (edge cells repeat): gradients of log-luma, so that an edge's
     // strength is its contrast, whatever the light. Row by row, each
     // plane's row taken once.
+    // (Split and sliced by checked calls: chunks of a size known only at
+    // run time would bring a division's panic path.)
     let (grey, rest) = out.split_at_mut(plane);
-    let mut planes = rest.chunks_exact_mut(plane);
-    let (Some(p0), Some(p1), Some(p2), Some(p3)) = (planes.next(), planes.next(), planes.next(), planes.next()) else {
-        return true;
-    };
+    let Some((p0, rest)) = rest.split_at_mut_checked(plane) else { return true };
+    let Some((p1, rest)) = rest.split_at_mut_checked(plane) else { return true };
+    let Some((p2, rest)) = rest.split_at_mut_checked(plane) else { return true };
+    let Some(p3) = rest.get_mut(..plane) else { return true };
     let row = |r: usize| grey.get(r * n..(r + 1) * n).unwrap_or(&[]);
-    for (r, (((o0, o1), o2), o3)) in p0
-        .chunks_exact_mut(n)
-        .zip(p1.chunks_exact_mut(n))
-        .zip(p2.chunks_exact_mut(n))
-        .zip(p3.chunks_exact_mut(n))
-        .enumerate()
-    {
+    for r in 0..n {
+        let at = r * n..(r + 1) * n;
+        let (Some(o0), Some(o1), Some(o2), Some(o3)) =
+            (p0.get_mut(at.clone()), p1.get_mut(at.clone()), p2.get_mut(at.clone()), p3.get_mut(at))
+        else {
+            continue;
+        };
         let (up, mid, down) = (row(r.saturating_sub(1)), row(r), row((r + 1).min(n - 1)));
         // The cells left of and at the current one (the first repeats).
         let first = mid.first().copied().unwrap_or(0);

@@ -572,8 +572,10 @@ impl GradientFilter {
                         // Each row moves to an index no later than its own
                         // and no later row's: nothing unread is overwritten.
                         let from = (k * READ + top + r) * READ + left;
-                        if from + LEARN <= self.cells.len() {
-                            self.cells.copy_within(from..from + LEARN, (k * LEARN + r) * LEARN);
+                        let row = self.cells.get(from..).and_then(|s| s.first_chunk::<LEARN>()).copied();
+                        let to = self.cells.get_mut((k * LEARN + r) * LEARN..).and_then(|s| s.first_chunk_mut());
+                        if let (Some(row), Some(to)) = (row, to) {
+                            *to = row;
                         }
                     }
                 }
@@ -585,7 +587,7 @@ impl GradientFilter {
                 }
             }
         }
-        let (cells, rest) = self.cells.split_at_mut(CHANNELS * LEARN * LEARN);
+        let Some((cells, rest)) = self.cells.split_at_mut_checked(CHANNELS * LEARN * LEARN) else { return };
         let lattice = Lattice::whole(cells, LEARN);
         let Some(norm) = normalise(lattice, Some(&TAPER)) else { return };
         // Each channel is transformed twice (once for the energy sum, once
