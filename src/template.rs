@@ -102,6 +102,9 @@ impl Template {
 /// a hill climb cannot climb.
 const PER_CELL: i32 = 2;
 
+/// `j + ½` for each point `j` of a cell's side.
+const HALF_STEPS: [Real; PER_CELL as usize] = [0.5, 1.5];
+
 /// Reads the box of `e` on the template grid: each sample is the mean luma
 /// of its cell of the box (so the correlation falls off smoothly, over
 /// about a cell, as a candidate moves off the target), read on a sub-grid
@@ -122,10 +125,15 @@ fn sample(frame: &Frame<'_>, e: &Ellipse) -> Patch {
         // Cortex-M0+, which has no divide instruction).
         let mut slots = coords.iter_mut();
         for cell in 0..GRID {
-            for j in 0..n {
-                let v = start + cell as Real * size + (j as Real + 0.5) * sub;
+            let first = start + cell as Real * size;
+            // Point `j` of a cell lies `j + ½` sub-steps into it (from a
+            // table: no conversion per point).
+            for &at in HALF_STEPS.iter().take(n) {
+                let v = first + at * sub;
                 if let Some(c) = slots.next() {
-                    *c = crate::region::floor(v).max(0).min(limit - 1) as usize;
+                    // Truncated rather than floored: the two differ only
+                    // below 0, which clamps to 0 either way.
+                    *c = (v as i32).max(0).min(limit - 1) as usize;
                 }
             }
         }

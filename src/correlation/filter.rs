@@ -591,18 +591,24 @@ fn row_value(row: &[Complex32; COLS], c: usize) -> Real {
 fn transform(work: &mut Spectrum, frame: &Frame<'_>, e: &Ellipse, padding: Real) -> bool {
     let (w, h) = (2.0 * e.hx * padding, 2.0 * e.hy * padding);
     let (x0, y0) = (e.cx - 0.5 * w, e.cy - 0.5 * h);
-    let (xmax, ymax) = (frame.width().saturating_sub(1) as Real, frame.height().saturating_sub(1) as Real);
+    let (xmax, ymax) = (frame.width().saturating_sub(1), frame.height().saturating_sub(1));
     // The samples, row by row, two to a complex slot (the real FFT's
-    // input layout); points outside the frame repeat its edge.
+    // input layout); points outside the frame repeat its edge. A sample's
+    // place: a sixteenth of the window (a multiplication rounds as the
+    // division by the power of two would) past its start, clamped as a
+    // whole number (the conversion takes what lies before the frame, and
+    // NaN, to 0, the `min` what lies past it to the last pixel).
+    let place =
+        |at: Real, start: Real, side: Real, max: usize| ((start + at * side * (1.0 / GRID as Real)) as usize).min(max);
     let mut columns = [0usize; GRID];
-    for (c, x) in columns.iter_mut().enumerate() {
-        *x = crate::scalar::clamp(x0 + (c as Real + 0.5) * w / GRID as Real, 0.0, xmax) as usize;
+    for (x, &at) in columns.iter_mut().zip(HALF_STEPS.iter()) {
+        *x = place(at, x0, w, xmax);
     }
     // The sum and the sum of squares, exact: each sample is below 2^15,
     // each square below 2^30.
     let (mut s1, mut s2) = (0u32, 0u64);
-    for (r, row) in work.iter_mut().enumerate() {
-        let y = crate::scalar::clamp(y0 + (r as Real + 0.5) * h / GRID as Real, 0.0, ymax) as usize;
+    for (row, &at) in work.iter_mut().zip(HALF_STEPS.iter()) {
+        let y = place(at, y0, h, ymax);
         let mut luma = [0u8; GRID];
         if let Some(pixels) = frame.row(y) {
             // One format dispatch per row, not per pixel.
@@ -712,6 +718,23 @@ impl RowReader for WindowRow<'_, '_> {
             *l = self.frame.luma_in(self.row, x).unwrap_or(0);
         }
     }
+}
+
+/// `i + ½` for each sample `i` of the window's side (from a table: no
+/// conversion per sample).
+const HALF_STEPS: [Real; GRID] = half_steps();
+
+// Evaluated at compile time only (for a `const`): an index out of range
+// would stop the build, never the device.
+#[allow(clippy::indexing_slicing)]
+const fn half_steps() -> [Real; GRID] {
+    let mut out = [0.5; GRID];
+    let mut i = 1;
+    while i < GRID {
+        out[i] = out[i - 1] + 1.0;
+        i += 1;
+    }
+    out
 }
 
 /// The offset, in `(−½, ½)` cells, of the vertex of the parabola through a
