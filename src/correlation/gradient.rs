@@ -154,27 +154,23 @@ struct Reading {
 /// 49 weights sum the full one's 169), so what is left fits an `i32`.
 const READING_SHIFT: u32 = 17;
 
-/// An `n` x `n` square of cells in a buffer of [`CHANNELS`] planes of
-/// `side` x `side` cells ([`channels::read`]'s layout), from cell
-/// `(top, left)`.
+/// The `n` x `n` cells of a buffer of [`CHANNELS`] planes
+/// ([`channels::read`]'s layout).
 #[derive(Copy, Clone)]
 struct Lattice<'a> {
     cells: &'a [u8],
-    side: usize,
-    top: usize,
-    left: usize,
     n: usize,
 }
 
 impl<'a> Lattice<'a> {
     /// All `n` x `n` cells of `cells`.
     fn whole(cells: &'a [u8], n: usize) -> Self {
-        Lattice { cells, side: n, top: 0, left: 0, n }
+        Lattice { cells, n }
     }
 
     /// Row `r` of channel `k` (empty outside the buffer).
     fn row(&self, k: usize, r: usize) -> &'a [u8] {
-        let start = (k * self.side + self.top + r) * self.side + self.left;
+        let start = (k * self.n + r) * self.n;
         self.cells.get(start..start + self.n).unwrap_or(&[])
     }
 }
@@ -1073,12 +1069,12 @@ mod tests {
         let mut fresh = vec![0u8; CHANNELS * LEARN * LEARN];
         assert!(channels::read(&frame(&px), (160.0, 120.0), (2.5, 2.5), READ, &mut read));
         assert!(channels::read(&frame(&px), (165.0, 117.5), (2.5, 2.5), LEARN, &mut fresh));
-        let sub = Lattice { cells: &read, side: READ, top: 6, left: 9, n: LEARN };
         let whole = Lattice::whole(&fresh, LEARN);
         for k in 0..CHANNELS {
             for r in 0..LEARN {
                 let inner = k == 0 || (1..LEARN - 1).contains(&r);
-                let (a, b) = (sub.row(k, r), whole.row(k, r));
+                let start = (k * READ + 6 + r) * READ + 9;
+                let (a, b) = (&read[start..start + LEARN], whole.row(k, r));
                 if inner {
                     assert_eq!(a.get(1..LEARN - 1), b.get(1..LEARN - 1), "channel {k}, row {r}");
                 }
