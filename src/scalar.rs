@@ -122,6 +122,32 @@ pub fn clamp(v: Real, lo: Real, hi: Real) -> Real {
     min(max(v, lo), hi)
 }
 
+/// The whole part of `v` as an index in `0..=last`: what lies below 0 (and
+/// NaN) gives 0, as the conversion saturates, and what lies past `last`
+/// gives `last`. The same index as clamping `v` to `[0, last]` first
+/// (`last` is a whole number), without the two comparisons, which are
+/// library calls on a Cortex-M0+.
+#[inline(always)]
+pub(crate) fn index_within(v: Real, last: usize) -> usize {
+    (v as usize).min(last)
+}
+
+/// `i + ½` for each `i` below `N`: the places of `N` samples spread
+/// evenly over a side, in steps (a table, so that no sample converts its
+/// index).
+// Evaluated at compile time only (for a `const`): an index out of range
+// would stop the build, never the device.
+#[allow(clippy::indexing_slicing)]
+pub(crate) const fn half_steps<const N: usize>() -> [Real; N] {
+    let mut out = [0.5; N];
+    let mut i = 1;
+    while i < N {
+        out[i] = out[i - 1] + 1.0;
+        i += 1;
+    }
+    out
+}
+
 /// The larger of `a` and `b`, or the one that is not NaN: `f32::max`'s
 /// answer, by comparisons. `f32::max` is a library call (`fmaxf`) on a
 /// Cortex-M4F, and the tracker takes thousands per frame: as calls,

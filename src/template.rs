@@ -12,7 +12,7 @@
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
 use crate::pixel::{self, Loop, Loops, PixelRead, RowReader};
-use crate::scalar::{Real, sqrt};
+use crate::scalar::{Real, half_steps, index_within, sqrt};
 
 /// Samples per side of the template grid.
 pub const GRID: usize = 8;
@@ -103,7 +103,7 @@ impl Template {
 const PER_CELL: i32 = 2;
 
 /// `j + ½` for each point `j` of a cell's side.
-const HALF_STEPS: [Real; PER_CELL as usize] = [0.5, 1.5];
+const HALF_STEPS: [Real; PER_CELL as usize] = half_steps();
 
 /// Reads the box of `e` on the template grid: each sample is the mean luma
 /// of its cell of the box (so the correlation falls off smoothly, over
@@ -111,7 +111,7 @@ const HALF_STEPS: [Real; PER_CELL as usize] = [0.5, 1.5];
 /// of at most [`PER_CELL`]² pixels. Pixels off the frame repeat its edge.
 fn sample(frame: &Frame<'_>, e: &Ellipse) -> Patch {
     let mut p = Patch { samples: [0; SAMPLES], sum: 0, sum2: 0 };
-    let (w, h) = (frame.width() as i32, frame.height() as i32);
+    let (xlast, ylast) = (frame.width().saturating_sub(1), frame.height().saturating_sub(1));
     let (cw, ch) = (2.0 * e.hx / GRID as Real, 2.0 * e.hy / GRID as Real);
     // Sub-grid points per cell and side (pixels at least one apart).
     let (nx, ny) = (cw.max(1.0).min(PER_CELL as Real) as usize, ch.max(1.0).min(PER_CELL as Real) as usize);
@@ -119,7 +119,8 @@ fn sample(frame: &Frame<'_>, e: &Ellipse) -> Patch {
     // once; off the frame they repeat its edge.
     let mut xs = [0usize; GRID * PER_CELL as usize];
     let mut ys = [0usize; GRID * PER_CELL as usize];
-    for (coords, n, size, start, limit) in [(&mut xs, nx, cw, e.cx - e.hx, w), (&mut ys, ny, ch, e.cy - e.hy, h)] {
+    for (coords, n, size, start, last) in [(&mut xs, nx, cw, e.cx - e.hx, xlast), (&mut ys, ny, ch, e.cy - e.hy, ylast)]
+    {
         let sub = size / n as Real;
         // Cell by cell, point by point: no division (a library call on a
         // Cortex-M0+, which has no divide instruction).
@@ -131,9 +132,7 @@ fn sample(frame: &Frame<'_>, e: &Ellipse) -> Patch {
             for &at in HALF_STEPS.iter().take(n) {
                 let v = first + at * sub;
                 if let Some(c) = slots.next() {
-                    // Truncated rather than floored: the two differ only
-                    // below 0, which clamps to 0 either way.
-                    *c = (v as i32).max(0).min(limit - 1) as usize;
+                    *c = index_within(v, last);
                 }
             }
         }

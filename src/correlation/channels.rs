@@ -23,7 +23,7 @@
 use super::filter::ln_1p;
 use crate::frame::Frame;
 use crate::pixel::{self, Loop, Loops, PixelRead, RowReader};
-use crate::scalar::Real;
+use crate::scalar::{Real, index_within};
 
 /// Unsigned gradient orientations: channels 1 to `ORIENTATIONS`.
 pub(crate) const ORIENTATIONS: usize = 4;
@@ -52,11 +52,8 @@ pub(crate) fn read(frame: &Frame<'_>, centre: (Real, Real), cell: (Real, Real), 
     // steps, an odd whole number, times half a step (both exact, so the
     // product rounds as `(i + ½ − n) · step` would).
     let half = (0.5 * cell.0 / POINTS as Real, 0.5 * cell.1 / POINTS as Real);
-    // Clamped to the frame as a whole number: the conversion takes what
-    // lies before the frame (and NaN) to 0, the `min` what lies past it to
-    // the last pixel.
-    let at = |i: usize, c: Real, half: Real, max: usize| {
-        ((c + (2 * i as i32 + 1 - 2 * n as i32) as Real * half) as usize).min(max)
+    let at = |i: usize, c: Real, half: Real, last: usize| {
+        index_within(c + (2 * i as i32 + 1 - 2 * n as i32) as Real * half, last)
     };
     let mut columns = [0usize; MAX_POINTS];
     for (j, x) in columns.iter_mut().enumerate().take(points) {

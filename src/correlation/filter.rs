@@ -41,7 +41,7 @@ use crate::filter::{Particle, scale_estimate, shift_estimate};
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
 use crate::pixel::{self, Loop, Loops, PixelRead, RowReader};
-use crate::scalar::{Real, sqrt};
+use crate::scalar::{Real, half_steps, index_within, sqrt};
 use microfft::Complex32;
 
 /// Lattice points per side of the window (a power of two, for the FFT).
@@ -594,12 +594,10 @@ fn transform(work: &mut Spectrum, frame: &Frame<'_>, e: &Ellipse, padding: Real)
     let (xmax, ymax) = (frame.width().saturating_sub(1), frame.height().saturating_sub(1));
     // The samples, row by row, two to a complex slot (the real FFT's
     // input layout); points outside the frame repeat its edge. A sample's
-    // place: a sixteenth of the window (a multiplication rounds as the
-    // division by the power of two would) past its start, clamped as a
-    // whole number (the conversion takes what lies before the frame, and
-    // NaN, to 0, the `min` what lies past it to the last pixel).
+    // place: its sixteenths of the window (a multiplication rounds as the
+    // division by the power of two would) past the window's start.
     let place =
-        |at: Real, start: Real, side: Real, max: usize| ((start + at * side * (1.0 / GRID as Real)) as usize).min(max);
+        |at: Real, start: Real, side: Real, last: usize| index_within(start + at * side * (1.0 / GRID as Real), last);
     let mut columns = [0usize; GRID];
     for (x, &at) in columns.iter_mut().zip(HALF_STEPS.iter()) {
         *x = place(at, x0, w, xmax);
@@ -720,22 +718,8 @@ impl RowReader for WindowRow<'_, '_> {
     }
 }
 
-/// `i + ½` for each sample `i` of the window's side (from a table: no
-/// conversion per sample).
+/// `i + ½` for each sample `i` of the window's side.
 const HALF_STEPS: [Real; GRID] = half_steps();
-
-// Evaluated at compile time only (for a `const`): an index out of range
-// would stop the build, never the device.
-#[allow(clippy::indexing_slicing)]
-const fn half_steps() -> [Real; GRID] {
-    let mut out = [0.5; GRID];
-    let mut i = 1;
-    while i < GRID {
-        out[i] = out[i - 1] + 1.0;
-        i += 1;
-    }
-    out
-}
 
 /// The offset, in `(−½, ½)` cells, of the vertex of the parabola through a
 /// peak and its two neighbours; 0 where they are flat.

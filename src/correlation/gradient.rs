@@ -596,10 +596,7 @@ impl GradientFilter {
             col.fill(LAMBDA);
         }
         for k in 0..CHANNELS {
-            let spectrum = match held.as_deref_mut() {
-                Some(h) if k + 2 == CHANNELS => h,
-                _ => &mut *spectrum,
-            };
+            let spectrum = slot(k, held.as_deref_mut(), spectrum);
             transform(spectrum, lattice, &norm, k);
             for (gain, col) in gain.iter_mut().zip(spectrum.iter()) {
                 for (e, x) in gain.iter_mut().zip(col.iter()) {
@@ -620,10 +617,7 @@ impl GradientFilter {
         }
         // The channels still held are solved first.
         for k in (0..CHANNELS).rev().take(kept).chain(0..CHANNELS - kept) {
-            let spectrum = match held.as_deref_mut() {
-                Some(h) if k + 2 == CHANNELS => h,
-                _ => &mut *spectrum,
-            };
+            let spectrum = slot(k, held.as_deref_mut(), spectrum);
             if k + kept < CHANNELS {
                 transform(spectrum, lattice, &norm, k);
             }
@@ -653,6 +647,15 @@ fn room(work: &mut [u16]) -> Option<Room<'_>> {
     let (gain, rest) = super::carve::<[Real; LEARN], COLS>(rest)?;
     let (cut, _) = super::carve::<[Real; SUPPORT], SUPPORT>(rest)?;
     Some(Room { spectrum, gain, cut })
+}
+
+/// Where channel `k`'s spectrum lies while it learns: the one before the
+/// last in `held` where there is one, every other in `spectrum`.
+fn slot<'a>(k: usize, held: Option<&'a mut Spectrum>, spectrum: &'a mut Spectrum) -> &'a mut Spectrum {
+    match held {
+        Some(h) if k + 2 == CHANNELS => h,
+        _ => spectrum,
+    }
 }
 
 /// A second spectrum for the learning, in the read window's cells past
