@@ -111,7 +111,9 @@ const HALF_STEPS: [Real; PER_CELL as usize] = half_steps();
 /// of at most [`PER_CELL`]² pixels. Pixels off the frame repeat its edge.
 fn sample(frame: &Frame<'_>, e: &Ellipse) -> Patch {
     let mut p = Patch { samples: [0; SAMPLES], sum: 0, sum2: 0 };
-    let (xlast, ylast) = (frame.width().saturating_sub(1), frame.height().saturating_sub(1));
+    // The last column and row (a frame is never empty; in `i32`, which
+    // compiles smaller here than a saturating subtraction).
+    let (xlast, ylast) = (frame.width() as i32 - 1, frame.height() as i32 - 1);
     let (cw, ch) = (2.0 * e.hx / GRID as Real, 2.0 * e.hy / GRID as Real);
     // Sub-grid points per cell and side (pixels at least one apart).
     let (nx, ny) = (cw.max(1.0).min(PER_CELL as Real) as usize, ch.max(1.0).min(PER_CELL as Real) as usize);
@@ -132,7 +134,7 @@ fn sample(frame: &Frame<'_>, e: &Ellipse) -> Patch {
             for &at in HALF_STEPS.iter().take(n) {
                 let v = first + at * sub;
                 if let Some(c) = slots.next() {
-                    *c = index_within(v, last);
+                    *c = index_within(v, last as usize);
                 }
             }
         }
