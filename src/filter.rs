@@ -94,7 +94,7 @@ impl Dynamics {
     /// `speed_noise`).
     pub(crate) fn propagate<R: Rng>(&self, p: &mut Particle, b: &Bounds, speed: Real, rng: &mut R) {
         let s = sqrt(4.0 * p.hx * p.hy);
-        let mut n = || normal_from_bits(rng.next_u64());
+        let mut n = || normal(rng);
         let spread = max(self.position_noise * s, self.speed_noise * speed);
         p.x += p.vx + spread * n();
         p.y += p.vy + spread * n();
@@ -108,6 +108,13 @@ impl Dynamics {
         p.hx = clamp(p.hx, b.min_half, max(0.5 * b.width, b.min_half));
         p.hy = clamp(p.hy, b.min_half, max(0.5 * b.height, b.min_half));
     }
+}
+
+/// A standard-normal draw from `rng` ([`normal_from_bits`]). Out of line:
+/// inlined, each of the many draw sites would carry the generator's code.
+#[inline(never)]
+pub(crate) fn normal<R: Rng>(rng: &mut R) -> Real {
+    normal_from_bits(rng.next_u64())
 }
 
 fn keep_inside(pos: &mut Real, vel: &mut Real, size: Real) {

@@ -9,12 +9,12 @@ use crate::config::{Life, LostSearch, ModelUpdate, Redetect};
 use crate::cue::Freedom;
 use crate::error::Error;
 use crate::estimate::{Diagnostics, Estimate, Event, TrackState};
-use crate::filter::{Bounds, Particle, mean_state, resample, scale_estimate, shift_estimate};
+use crate::filter::{Bounds, Particle, mean_state, normal, resample, scale_estimate, shift_estimate};
 use crate::foreground::RING;
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
 use crate::likelihood::gaussian;
-use crate::scalar::{Real, normal_from_bits, sqrt};
+use crate::scalar::{Real, sqrt};
 use rand_core::Rng;
 
 impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tracker<N, K, E, R, T> {
@@ -165,7 +165,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
             *p = match spot {
                 Some((x, y)) => {
                     let s = 0.1 * sqrt(4.0 * hx * hy);
-                    let (dx, dy) = (normal_from_bits(rng.next_u64()), normal_from_bits(rng.next_u64()));
+                    let (dx, dy) = (normal(rng), normal(rng));
                     // A target found away from its last place moved there
                     // over the frames it was missed, and goes on moving.
                     let (vx, vy) = if near {
