@@ -89,7 +89,8 @@ pub(crate) struct Track<const N: usize, const K: usize, R, const T: usize> {
     /// hypotheses it observed, [`Config::sure_share`]).
     weights: [Real; N],
     target: Option<Target<K>>,
-    /// The likelihood table (table mode only; zero-sized when `T` is 0).
+    /// The likelihood table (table mode only). With `T` 0 its cells take no
+    /// room, but its header (origin, grid and spacing) does.
     table: Table<T>,
     state: TrackState,
     /// Frames since the target was last found (none while searching).
