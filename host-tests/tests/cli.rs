@@ -91,6 +91,54 @@ fn score_breaks_the_overlap_down_into_size_and_centre() {
 }
 
 #[test]
+fn score_pairs_runs_and_reports_their_spread() {
+    // Reason: by hand, a 10x10 target at the origin over two frames (AUC
+    // counts both, as above: an exact box is above 20 of the 21
+    // thresholds, one twice the size, IoU 1/4, above 5). Set `a`: run 1
+    // exact twice, AUC 40/42 = 0.95238; run 2 exact then twice the size,
+    // 25/42 = 0.59524. Their standard deviation: 0.35714 / sqrt 2 =
+    // 0.2525. Set `b`: exact in both runs, sd 0; paired with `a`, the
+    // differences 0 and 0.35714, their mean 0.1786 and its standard error
+    // (sd 0.2525) / sqrt 2 = 0.1786. Set `c` has one run: no spread, and
+    // not paired with two.
+    let dir = std::env::temp_dir().join(format!("pftrack-cli-runs-{}", std::process::id()));
+    for d in ["seq", "a1", "a2", "b1", "b2"] {
+        std::fs::create_dir_all(dir.join(d)).unwrap();
+    }
+    std::fs::write(dir.join("seq/groundtruth.txt"), "0,0,10,10\n".repeat(2)).unwrap();
+    for d in ["a1", "b1", "b2"] {
+        std::fs::write(dir.join(d).join("seq.txt"), "0,0,10,10\n0,0,10,10\n").unwrap();
+    }
+    std::fs::write(dir.join("a2/seq.txt"), "0,0,10,10\n-5,-5,20,20\n").unwrap();
+    let set = |name: &str, runs: &[&str]| {
+        let folders: Vec<String> = runs.iter().map(|r| dir.join(r).display().to_string()).collect();
+        format!("{name}={}", folders.join(","))
+    };
+    let (a, b, c) = (set("a", &["a1", "a2"]), set("b", &["b1", "b2"]), set("c", &["b1"]));
+    let (seq, plots) = (dir.join("seq"), dir.join("plots"));
+    let (ok, stdout, stderr) = track(&[
+        "score",
+        "--truth",
+        seq.to_str().unwrap(),
+        "--plots",
+        plots.to_str().unwrap(),
+        "--results",
+        &a,
+        &b,
+        &c,
+    ]);
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("| a | 2 | 0.2525 | - |"), "{stdout}");
+    assert!(stdout.contains("| b | 2 | 0.0000 | +0.1786 ± 0.1786 |"), "{stdout}");
+    assert!(stdout.contains("| c | 1 | - | - |"), "{stdout}");
+    // One run each: nothing to tell apart, no table.
+    let (ok, stdout, stderr) =
+        track(&["score", "--truth", seq.to_str().unwrap(), "--plots", plots.to_str().unwrap(), "--results", &c]);
+    assert!(ok && !stdout.contains("Between runs"), "{stderr}{stdout}");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
 fn score_ranks_missing_frames_by_each_trackers_confidence() {
     // Reason: by hand, a 10x10 target at the origin over five frames. The
     // first box is given, not tracked: it is left out though it misses.

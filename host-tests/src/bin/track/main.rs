@@ -136,7 +136,9 @@ enum Command {
         truth: Vec<PathBuf>,
         /// Result folders, as NAME=FOLDER or FOLDER (named after the
         /// folder); NAME=F1,F2,… scores several runs (e.g. seeds) as one,
-        /// averaging each sequence's scores over them.
+        /// averaging each sequence's scores over them, and reports how far
+        /// apart its runs are and, for a set of as many runs as the first,
+        /// its difference with the first paired run by run (F1 with F1…).
         #[arg(long, required = true, num_args = 1..)]
         results: Vec<String>,
         /// Where to write success.png and precision.png.

@@ -121,6 +121,7 @@ pub(crate) fn command(
     }
     // Per set: its curves, and each sequence's AUC averaged over the set's runs.
     let mut sets = Vec::new();
+    let mut per_runs = Vec::new();
     for spec in results {
         let (name, folders) = match spec.split_once('=') {
             Some((n, f)) => (n.to_string(), f.split(',').map(PathBuf::from).collect::<Vec<_>>()),
@@ -132,6 +133,8 @@ pub(crate) fn command(
         let mut runs = Vec::new();
         let mut ms = Vec::new();
         let mut per_seq = vec![0.0; truths.len()];
+        // Each run's AUC per sequence, for the spread between runs.
+        let mut per_run = Vec::new();
         // Means over sequences of the breakdown's two AUCs.
         let mut breakdowns = (0.0, 0.0);
         // Per folder (a run, e.g. a seed): its frames pooled over sequences,
@@ -139,6 +142,7 @@ pub(crate) fn command(
         let mut aware = Vec::new();
         for folder in &folders {
             let (mut pooled, mut confident) = (Awareness::default(), true);
+            let mut run_seq = Vec::with_capacity(truths.len());
             for ((seq, t), acc) in truths.iter().zip(per_seq.iter_mut()) {
                 let boxes = read_boxes(&folder.join(format!("{seq}.txt")))?;
                 if boxes.len() != t.len() {
@@ -158,7 +162,9 @@ pub(crate) fn command(
                 for ((b, t), &c) in boxes.iter().zip(t).skip(1).zip(&conf) {
                     pooled.add(b, true, c, t);
                 }
-                *acc += score(&boxes, t).map_or(0.0, |s| s.auc) / folders.len() as f64;
+                let auc = score(&boxes, t).map_or(0.0, |s| s.auc);
+                *acc += auc / folders.len() as f64;
+                run_seq.push(auc);
                 if let Some(b) = breakdown(&boxes, t) {
                     let n = (folders.len() * truths.len()) as f64;
                     (breakdowns.0, breakdowns.1) = (breakdowns.0 + b.true_size / n, breakdowns.1 + b.true_centre / n);
@@ -166,6 +172,7 @@ pub(crate) fn command(
                 runs.push((boxes, t.clone()));
             }
             aware.push((pooled, confident));
+            per_run.push(run_seq);
         }
         let ms = (ms.len() == runs.len()).then(|| ms.iter().sum::<f64>() / ms.len() as f64);
         let missing: Vec<f64> = aware.iter().filter_map(|(a, _)| a.missing_share()).collect();
@@ -173,6 +180,7 @@ pub(crate) fn command(
         // A ROC only when every run has confidences: a mean over some seeds would not compare.
         let roc = if aware.iter().all(|(_, c)| *c) { mean(&roc) } else { None };
         sets.push((score_set(&name, &runs, ms)?, per_seq, breakdowns, (mean(&missing), roc)));
+        per_runs.push(per_run);
     }
     let seqs: Vec<&str> = truths.iter().map(|(n, _)| n.as_str()).collect();
     println!("{} sequences: {}", seqs.len(), seqs.join(", "));
@@ -227,7 +235,79 @@ pub(crate) fn command(
         let auc = per_seq.iter().sum::<f64>() / per_seq.len().max(1) as f64;
         println!("| {} | {auc:.3} | {size:.3} ({:+.3}) | {centre:.3} ({:+.3}) |", r.name, size - auc, centre - auc);
     }
+    between_runs(&sets.iter().map(|(s, ..)| s.name.as_str()).collect::<Vec<_>>(), &per_runs, &folder_of, split);
     std::fs::create_dir_all(plots).map_err(|e| format!("{}: {e}", plots.display()))?;
     let sets: Vec<SetScore> = sets.into_iter().map(|(s, _, _, _)| s).collect();
     draw_plots(&sets, plots, &format!("{} sequences", seqs.len()))
+}
+
+/// The mean and the sample standard deviation of some numbers (at least two).
+fn spread(v: &[f64]) -> Option<(f64, f64)> {
+    let m = mean(v)?;
+    let n = v.len();
+    (n > 1).then(|| (m, (v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (n - 1) as f64).sqrt()))
+}
+
+/// How far apart runs are: per set, the standard deviation of a run's
+/// mean AUC over the sequences (a run is a result folder, e.g. a seed);
+/// per set after the first with as many runs, the mean of its runs'
+/// differences with the first set's, run by run in the order given, and
+/// that mean's standard error. Paired, the seeds' shared luck (a sequence
+/// every configuration finds hard on some seed) cancels. Printed where a
+/// set has two runs or more.
+fn between_runs(names: &[&str], per_runs: &[Vec<Vec<f64>>], folder_of: &[String], split: Option<&Split>) {
+    if per_runs.iter().all(|runs| runs.len() < 2) {
+        return;
+    }
+    // A run's mean AUC over the sequences in `only` (all without one).
+    let run_mean = |run: &[f64], only: Option<&[String]>| {
+        let v: Vec<f64> = folder_of
+            .iter()
+            .zip(run)
+            .filter(|(n, _)| only.is_none_or(|o| o.iter().any(|m| m == *n)))
+            .map(|(_, &a)| a)
+            .collect();
+        mean(&v).unwrap_or(0.0)
+    };
+    let means = |runs: &[Vec<f64>], only: Option<&[String]>| runs.iter().map(|r| run_mean(r, only)).collect::<Vec<_>>();
+    let first = names.first().copied().unwrap_or("");
+    let reference = per_runs.first().map(Vec::as_slice).unwrap_or(&[]);
+    let paired = |runs: &[Vec<f64>], only: Option<&[String]>| {
+        if runs.len() != reference.len() {
+            return "-".to_string();
+        }
+        let d: Vec<f64> = means(runs, only).iter().zip(means(reference, only)).map(|(a, b)| a - b).collect();
+        match spread(&d) {
+            Some((m, sd)) => format!("{m:+.4} ± {:.4}", sd / (d.len() as f64).sqrt()),
+            None => "-".to_string(),
+        }
+    };
+    println!();
+    println!(
+        "Between runs (a run is one result folder, e.g. one seed): the standard deviation of a run's mean AUC over the sequences, and each set's difference with the first, {first}, paired run by run in the order given, ± its standard error:"
+    );
+    println!();
+    let check = split.map(|s| s.check.as_slice());
+    match check {
+        Some(_) => {
+            println!("| tracker | runs | sd between runs | difference | on check |");
+            println!("|---|---|---|---|---|");
+        }
+        None => {
+            println!("| tracker | runs | sd between runs | difference |");
+            println!("|---|---|---|---|");
+        }
+    }
+    for (i, (name, runs)) in names.iter().zip(per_runs).enumerate() {
+        let sd = spread(&means(runs, None)).map_or("-".to_string(), |(_, sd)| format!("{sd:.4}"));
+        let (all, on_check) = if i == 0 {
+            ("-".to_string(), "-".to_string())
+        } else {
+            (paired(runs, None), check.map_or(String::new(), |c| paired(runs, Some(c))))
+        };
+        match check {
+            Some(_) => println!("| {name} | {} | {sd} | {all} | {on_check} |", runs.len()),
+            None => println!("| {name} | {} | {sd} | {all} |", runs.len()),
+        }
+    }
 }
