@@ -253,8 +253,8 @@ fn spread(v: &[f64]) -> Option<(f64, f64)> {
 /// per set after the first with as many runs, the mean of its runs'
 /// differences with the first set's, run by run in the order given, and
 /// that mean's standard error. Paired, the seeds' shared luck (a sequence
-/// every configuration finds hard on some seed) cancels. Printed where a
-/// set has two runs or more.
+/// every configuration finds hard on some seed) cancels. Printed for the
+/// sets of two runs or more.
 fn between_runs(names: &[&str], per_runs: &[Vec<Vec<f64>>], folder_of: &[String], split: Option<&Split>) {
     if per_runs.iter().all(|runs| runs.len() < 2) {
         return;
@@ -298,7 +298,7 @@ fn between_runs(names: &[&str], per_runs: &[Vec<Vec<f64>>], folder_of: &[String]
             println!("|---|---|---|---|");
         }
     }
-    for (i, (name, runs)) in names.iter().zip(per_runs).enumerate() {
+    for (i, (name, runs)) in names.iter().zip(per_runs).enumerate().filter(|(_, (_, runs))| runs.len() > 1) {
         let sd = spread(&means(runs, None)).map_or("-".to_string(), |(_, sd)| format!("{sd:.4}"));
         let (all, on_check) = if i == 0 {
             ("-".to_string(), "-".to_string())
