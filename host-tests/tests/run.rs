@@ -199,10 +199,18 @@ fn peak_mb(text: &str) -> f64 {
 
 #[test]
 fn memory_does_not_grow_with_the_number_of_frames() {
+    const MARGIN_MB: f64 = 2.0;
     // Reason: frames are read, tracked and written one at a time, so ten
-    // times the frames must not need more memory; the margin (0.5 MB)
-    // covers what does grow per frame (`otb` keeps every box to score them,
-    // about 0.4 KB a frame) and the allocator's rounding.
+    // times the frames must not need more memory. The margin (2 MB) covers
+    // what does grow per frame (`otb` keeps every box to score them, about
+    // 0.4 KB a frame), the allocator's rounding, and what the peak
+    // resident size counts beside the heap (the binary's own pages as they
+    // are mapped), which varies between runs: over five runs of this test
+    // `otb`'s peak for 44 frames was 7.0 to 7.3 MB and 440 frames measured
+    // 0.0 to 0.5 MB more, and once in CI 0.6 MB more. A frame
+    // kept for each frame would still show: over the 396 extra frames of
+    // these 128 x 96 scenes, 7 MB as I420 (`run`) and 15 MB as RGB
+    // (`otb`).
     let dir = scratch("memory");
     let name = "occlusion";
     let b = first_box(name);
@@ -219,7 +227,7 @@ fn memory_does_not_grow_with_the_number_of_frames() {
         assert_eq!(out.lines().count(), repeats * frames.len() / record);
         peaks.push(peak_mb(&err));
     }
-    assert!(peaks[1] <= peaks[0] + 0.5, "track run: peak {} MB for 44 frames, {} MB for 440", peaks[0], peaks[1]);
+    assert!(peaks[1] <= peaks[0] + MARGIN_MB, "track run: peak {} MB for 44 frames, {} MB for 440", peaks[0], peaks[1]);
 
     // `track otb` on sequences of 44 and 440 PNG frames.
     let fx = Fixture::load(Path::new(&fixture("distractor"))).unwrap();
@@ -234,7 +242,7 @@ fn memory_does_not_grow_with_the_number_of_frames() {
         assert!(ok, "{err}");
         peaks.push(peak_mb(&out));
     }
-    assert!(peaks[1] <= peaks[0] + 0.5, "track otb: peak {} MB for 44 frames, {} MB for 440", peaks[0], peaks[1]);
+    assert!(peaks[1] <= peaks[0] + MARGIN_MB, "track otb: peak {} MB for 44 frames, {} MB for 440", peaks[0], peaks[1]);
     std::fs::remove_dir_all(dir).ok();
 }
 
