@@ -132,8 +132,7 @@ pub(crate) fn command(
         };
         let mut runs = Vec::new();
         let mut ms = Vec::new();
-        let mut per_seq = vec![0.0; truths.len()];
-        // Each run's AUC per sequence, for the spread between runs.
+        // Each run's AUC per sequence.
         let mut per_run = Vec::new();
         // Means over sequences of the breakdown's two AUCs.
         let mut breakdowns = (0.0, 0.0);
@@ -143,7 +142,7 @@ pub(crate) fn command(
         for folder in &folders {
             let (mut pooled, mut confident) = (Awareness::default(), true);
             let mut run_seq = Vec::with_capacity(truths.len());
-            for ((seq, t), acc) in truths.iter().zip(per_seq.iter_mut()) {
+            for (seq, t) in &truths {
                 let boxes = read_boxes(&folder.join(format!("{seq}.txt")))?;
                 if boxes.len() != t.len() {
                     return Err(format!("{name}: {seq} has {} boxes for {} frames", boxes.len(), t.len()));
@@ -162,9 +161,7 @@ pub(crate) fn command(
                 for ((b, t), &c) in boxes.iter().zip(t).skip(1).zip(&conf) {
                     pooled.add(b, true, c, t);
                 }
-                let auc = score(&boxes, t).map_or(0.0, |s| s.auc);
-                *acc += auc / folders.len() as f64;
-                run_seq.push(auc);
+                run_seq.push(score(&boxes, t).map_or(0.0, |s| s.auc));
                 if let Some(b) = breakdown(&boxes, t) {
                     let n = (folders.len() * truths.len()) as f64;
                     (breakdowns.0, breakdowns.1) = (breakdowns.0 + b.true_size / n, breakdowns.1 + b.true_centre / n);
@@ -173,6 +170,11 @@ pub(crate) fn command(
             }
             aware.push((pooled, confident));
             per_run.push(run_seq);
+        }
+        // Each sequence's AUC averaged over the runs.
+        let mut per_seq = vec![0.0; truths.len()];
+        for run in &per_run {
+            per_seq.iter_mut().zip(run).for_each(|(acc, auc)| *acc += auc / folders.len() as f64);
         }
         let ms = (ms.len() == runs.len()).then(|| ms.iter().sum::<f64>() / ms.len() as f64);
         let missing: Vec<f64> = aware.iter().filter_map(|(a, _)| a.missing_share()).collect();
@@ -185,11 +187,7 @@ pub(crate) fn command(
     let seqs: Vec<&str> = truths.iter().map(|(n, _)| n.as_str()).collect();
     println!("{} sequences: {}", seqs.len(), seqs.join(", "));
     println!();
-    let mean_of = |per_seq: &[f64], names: &[String]| {
-        let v: Vec<f64> =
-            folder_of.iter().zip(per_seq).filter(|(n, _)| names.iter().any(|m| m == *n)).map(|(_, &a)| a).collect();
-        fmt3((!v.is_empty()).then(|| v.iter().sum::<f64>() / v.len() as f64))
-    };
+    let mean_of = |per_seq: &[f64], names: &[String]| fmt3(mean_within(per_seq, &folder_of, Some(names)));
     match split {
         Some(_) => {
             println!(
@@ -241,6 +239,18 @@ pub(crate) fn command(
     draw_plots(&sets, plots, &format!("{} sequences", seqs.len()))
 }
 
+/// The mean of per-sequence `values` over the sequences whose folder (as
+/// `folder_of` names them) is in `only` (all without one); `None` for none.
+fn mean_within(values: &[f64], folder_of: &[String], only: Option<&[String]>) -> Option<f64> {
+    let v: Vec<f64> = folder_of
+        .iter()
+        .zip(values)
+        .filter(|(n, _)| only.is_none_or(|o| o.iter().any(|m| m == *n)))
+        .map(|(_, &a)| a)
+        .collect();
+    mean(&v)
+}
+
 /// The mean and the sample standard deviation of some numbers (at least two).
 fn spread(v: &[f64]) -> Option<(f64, f64)> {
     let m = mean(v)?;
@@ -259,17 +269,9 @@ fn between_runs(names: &[&str], per_runs: &[Vec<Vec<f64>>], folder_of: &[String]
     if per_runs.iter().all(|runs| runs.len() < 2) {
         return;
     }
-    // A run's mean AUC over the sequences in `only` (all without one).
-    let run_mean = |run: &[f64], only: Option<&[String]>| {
-        let v: Vec<f64> = folder_of
-            .iter()
-            .zip(run)
-            .filter(|(n, _)| only.is_none_or(|o| o.iter().any(|m| m == *n)))
-            .map(|(_, &a)| a)
-            .collect();
-        mean(&v).unwrap_or(0.0)
+    let means = |runs: &[Vec<f64>], only: Option<&[String]>| {
+        runs.iter().map(|r| mean_within(r, folder_of, only).unwrap_or(0.0)).collect::<Vec<_>>()
     };
-    let means = |runs: &[Vec<f64>], only: Option<&[String]>| runs.iter().map(|r| run_mean(r, only)).collect::<Vec<_>>();
     let first = names.first().copied().unwrap_or("");
     let reference = per_runs.first().map(Vec::as_slice).unwrap_or(&[]);
     let paired = |runs: &[Vec<f64>], only: Option<&[String]>| {
