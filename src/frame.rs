@@ -211,9 +211,13 @@ impl<'a> Frame<'a> {
         if y >= self.height {
             return None;
         }
-        let start = y.checked_mul(self.stride)?;
+        // Every constructor checked that `stride · (height − 1) + width ·
+        // bytes per pixel` fits the buffer, so for `y < height` neither sum
+        // overflows: plain arithmetic (a checked multiplication is a 64-bit
+        // library call on a Cortex-M0+, and this runs for every row read).
+        let start = y.wrapping_mul(self.stride);
         let len = self.width * self.format.bytes_per_pixel();
-        self.data.get(start..start.checked_add(len)?)
+        self.data.get(start..start.wrapping_add(len))
     }
 
     /// The colour of pixel `(x, y)` as 8-bit RGB, or `None` outside the frame.

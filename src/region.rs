@@ -373,9 +373,13 @@ pub(crate) fn for_each_row<F: FnMut(RowSpan<'_>)>(frame: &Frame<'_>, e: &Ellipse
     // its neighbour's, so walking from it is cheaper than a square root.
     let mut dx_max: u32 = 0;
     while y <= y_hi {
+        // `|dy| <= ry = ⌊Hy⌋` on every row walked, so `dy²·ay <= Hy²·2^24 /
+        // Hy² = 2^24`: the product fits 32 bits, and plain multiplications
+        // (a checked one is a 64-bit library call on a Cortex-M0+, twice a
+        // row of every region) give it exactly.
         let dy = y.abs_diff(r.cy);
-        if let Some(ry2) = dy.checked_mul(dy).and_then(|d| d.checked_mul(r.ay))
-            && let Some(rem) = one.checked_sub(min_gap).and_then(|m| m.checked_sub(ry2))
+        let ry2 = dy.wrapping_mul(dy).wrapping_mul(r.ay);
+        if let Some(rem) = one.checked_sub(min_gap).and_then(|m| m.checked_sub(ry2))
             && let Some(row) = frame.row(y as usize)
         {
             widen(&mut dx_max, rem, r.ax);
