@@ -110,12 +110,12 @@
 
 #if defined(__LP64__)
 // 64-bit words of a [`pftrack_tracker`] on a 64-bit target.
-#define PFTRACK_TRACKER_WORDS 4838
+#define PFTRACK_TRACKER_WORDS 4839
 #endif
 
 #if !defined(__LP64__)
 // 64-bit words of a [`pftrack_tracker`] on a 32-bit target.
-#define PFTRACK_TRACKER_WORDS 4830
+#define PFTRACK_TRACKER_WORDS 4831
 #endif
 
 // Bytes of a [`pftrack_tracker`].

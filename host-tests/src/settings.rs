@@ -127,7 +127,7 @@ pub const KEYS: &[Key] = &[
     ),
     key(
         "gradient",
-        "off | on | RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND:RELEARN_BELOW:RELEARN_ABOVE[:PYRAMID_PULL:PYRAMID_LEARN_ABOVE] (correlation filter on gradient channels over a wide window, and its scale pyramid, off when left out; on = 0.2:0.7:4:0.7:0.03:0.3:3:0:4:0.8:0.2:0.9)",
+        "off | on | RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND:RELEARN_BELOW:RELEARN_ABOVE[:PYRAMID_PULL:PYRAMID_LEARN_ABOVE[:GREY_PULL]] (correlation filter on gradient channels over a wide window, and its scale pyramid, off when left out; GREY_PULL, the pull on grey-level video, PULL when left out; on = 0.2:0.7:4:0.7:0.03:0.3:3:0:4:0.8:0.2:0.9:0.85)",
         gradient,
     ),
     key(
@@ -377,11 +377,17 @@ fn gradient(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
         ["off"] => None,
         ["on"] => Some(pftrack::GradientCue::MEASURED),
         [rate, above, every, pull, step, scale_pull, psr, blend, relearn_below, relearn_above, pyramid @ ..] => {
-            // The pyramid's fields, off when left out.
-            let (pyramid_pull, pyramid_learn_above) = match pyramid {
-                [] => (0.0, 0.0),
-                [p, a] => (num(key, p)?, num(key, a)?),
-                _ => return Err(format!("{key}: `{v}`: a scale pyramid needs PYRAMID_PULL:PYRAMID_LEARN_ABOVE")),
+            // The pyramid's fields, off when left out; the pull on grey
+            // video, the pull's when left out.
+            let (pyramid_pull, pyramid_learn_above, grey_pull) = match pyramid {
+                [] => (0.0, 0.0, num(key, pull)?),
+                [p, a] => (num(key, p)?, num(key, a)?, num(key, pull)?),
+                [p, a, g] => (num(key, p)?, num(key, a)?, num(key, g)?),
+                _ => {
+                    return Err(format!(
+                        "{key}: `{v}`: a scale pyramid needs PYRAMID_PULL:PYRAMID_LEARN_ABOVE[:GREY_PULL]"
+                    ));
+                }
             };
             Some(pftrack::GradientCue {
                 rate: num(key, rate)?,
@@ -390,6 +396,7 @@ fn gradient(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
                     .parse()
                     .map_err(|_| format!("{key}: `{every}`: LEARN_EVERY is a count from 1 to 255"))?,
                 pull: num(key, pull)?,
+                grey_pull,
                 scale_step: num(key, step)?,
                 scale_pull: num(key, scale_pull)?,
                 min_psr: num(key, psr)?,
@@ -402,7 +409,7 @@ fn gradient(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
         }
         _ => {
             return Err(format!(
-                "{key}: `{v}`: expected off, on or RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND:RELEARN_BELOW:RELEARN_ABOVE[:PYRAMID_PULL:PYRAMID_LEARN_ABOVE]"
+                "{key}: `{v}`: expected off, on or RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND:RELEARN_BELOW:RELEARN_ABOVE[:PYRAMID_PULL:PYRAMID_LEARN_ABOVE[:GREY_PULL]]"
             ));
         }
     };
@@ -502,6 +509,26 @@ mod tests {
         assert!(apply(&mut Config::default(), "nope=1").is_err());
         assert!(apply(&mut Config::default(), "sigma").is_err());
         assert!(apply(&mut Config::default(), "sigma=abc").is_err());
+    }
+
+    #[test]
+    fn the_gradient_filter_reads_its_fields_in_order() {
+        // Reason: the help text's forms, field by field: `on` is the
+        // thirteen fields it lists; twelve leave the pull on grey video at
+        // the pull, ten leave the pyramid off too.
+        let gradient = |v: &str| {
+            let mut c = Config::default();
+            apply(&mut c, &format!("gradient={v}")).map(|()| c.gradient)
+        };
+        let on = gradient("on").unwrap();
+        assert_eq!(on, gradient("0.2:0.7:4:0.7:0.03:0.3:3:0:4:0.8:0.2:0.9:0.85").unwrap());
+        assert_eq!(on.map(|g| (g.pull, g.grey_pull)), Some((0.7, 0.85)));
+        let g = gradient("0.2:0.7:4:0.6:0.03:0.3:3:0:4:0.8:0.2:0.9").unwrap().unwrap();
+        assert_eq!((g.pull, g.grey_pull, g.pyramid_pull, g.pyramid_learn_above), (0.6, 0.6, 0.2, 0.9));
+        let g = gradient("0.2:0.7:4:0.6:0.03:0.3:3:0:4:0.8").unwrap().unwrap();
+        assert_eq!((g.grey_pull, g.pyramid_pull, g.pyramid_learn_above), (0.6, 0.0, 0.0));
+        assert!(gradient("0.2:0.7:4:0.6:0.03:0.3:3:0:4:0.8:0.2").is_err());
+        assert!(gradient("0.2:0.7:4:0.6:0.03:0.3:3:0:4:0.8:0.2:0.9:0.85:1").is_err());
     }
 
     #[test]

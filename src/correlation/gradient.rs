@@ -210,6 +210,9 @@ pub(crate) struct GradientFilter {
     /// Whether this frame's response, as `place` read it, fell under
     /// [`GradientCue::relearn_below`] (until `adapt` has seen it).
     unlike: bool,
+    /// Whether the window first learnt was all grey levels
+    /// ([`GradientCue::grey_pull`]).
+    grey: bool,
     /// Where `cells` holds this frame's read window: its centre and cell
     /// size (cleared once the frame is adapted to).
     window: Option<((Real, Real), (Real, Real))>,
@@ -309,6 +312,7 @@ impl GradientFilter {
             learned: false,
             waiting: 0,
             unlike: false,
+            grey: false,
             window: None,
             cells: [0; CHANNELS * READ * READ],
             #[cfg(feature = "scale-pyramid")]
@@ -532,7 +536,8 @@ impl GradientFilter {
         self.unlike = seen.psr < c.relearn_below;
         if seen.psr >= c.min_psr && freedom.moves() {
             let (x, y) = (seen.centre.0 + seen.at.0, seen.centre.1 + seen.at.1);
-            let (dx, dy) = (c.pull * (x - ellipse.cx), c.pull * (y - ellipse.cy));
+            let pull = if self.grey { c.grey_pull } else { c.pull };
+            let (dx, dy) = (pull * (x - ellipse.cx), pull * (y - ellipse.cy));
             shift_estimate(ellipse, particles, (dx, dy), frame);
             if c.scale_step > 0.0 && freedom.sizes() {
                 let mut best = None;
@@ -723,6 +728,31 @@ fn within(((cx, cy), read): ((Real, Real), (Real, Real)), e: &Ellipse, cell: (Re
     Some((at(e.cy - cy, read.1)?, at(e.cx - cx, read.0)?))
 }
 
+/// Whether every pixel on a [`LEARN`] x [`LEARN`] lattice from the learning
+/// window's top-left corner, a [`LEARN`]th of its side apart (rounded down
+/// to whole pixels, at least one), is a grey level: its red, green and blue agree in their
+/// top five bits, as a grey level does in every format (RGB565 keeps only
+/// those of red and blue; GRAY8 and YUV with U = V = 128 give R = G = B).
+/// That is a mono camera's frame, or grey video delivered in a colour
+/// format; colour video has pixels that differ by more than that. The
+/// window rather than the box, so that a grey target in a colour scene is
+/// not taken for grey video; points past the frame's edge are left out.
+/// Read once a target, when it is learnt.
+#[inline(never)]
+fn grey_levels(frame: &Frame<'_>, e: &Ellipse) -> bool {
+    // The window's corner and the step between samples, in whole pixels
+    // (the casts saturate: a corner left of or above the frame is 0).
+    let corner = ((e.cx - WINDOW * e.hx) as usize, (e.cy - WINDOW * e.hy) as usize);
+    let step = |h: Real| ((2.0 * WINDOW * h / LEARN as Real) as usize).max(1);
+    let (sx, sy) = (step(e.hx), step(e.hy));
+    (0..LEARN).all(|i| {
+        (0..LEARN).all(|j| {
+            let grey = |[r, g, b]: [u8; 3]| r >> 3 == g >> 3 && g >> 3 == b >> 3;
+            frame.rgb(corner.0 + j * sx, corner.1 + i * sy).is_none_or(grey)
+        })
+    })
+}
+
 /// Blends a channel's cut filter `cut` into its weights, sum and scale at
 /// `eta`, and quantises them afresh.
 fn blend((weights, sum, scale): (&mut [[i16; SUPPORT]; SUPPORT], &mut i32, &mut Real), cut: &Cut, eta: Real) {
@@ -880,6 +910,7 @@ impl Cue for GradientFilter {
         self.waiting = 0;
         self.window = None;
         if let Some(_c) = settings {
+            self.grey = grey_levels(frame, e);
             self.learn(frame, e, 1.0, work);
             #[cfg(feature = "scale-pyramid")]
             self.pyramid.start(_c, frame, e);
@@ -1183,6 +1214,50 @@ mod tests {
             }
         }
         assert_eq!(psrs[0], psrs[1]);
+    }
+
+    #[test]
+    fn grey_video_is_told_from_colour_and_trusts_the_filter_further() {
+        // Reason: the rule by construction. A frame whose every pixel read
+        // over the learning window is a grey level (GRAY8, RGB with R = G =
+        // B, RGB565 written from grey levels, whose expanded red and green
+        // differ by up to 4) is grey video; a coloured band (blue halved)
+        // through the window makes it colour, one outside the window (which
+        // spans the centre ± 2.5 half axes, 120 to 200 px here) does not.
+        // On grey video the
+        // estimate moves `grey_pull` of the way to the response's peak, on
+        // colour video `pull` of it (shifts are exact: nothing is clamped
+        // this far inside the frame).
+        let e = target();
+        let rgb = |px: &[u8], tinted: &dyn Fn(usize, usize) -> bool| -> Vec<u8> {
+            let pixel = |(i, &v): (usize, &u8)| if tinted(i % W, i / W) { [v, v, v / 2] } else { [v, v, v] };
+            px.iter().enumerate().flat_map(pixel).collect()
+        };
+        fn rgb_frame(px: &[u8]) -> Frame<'_> {
+            Frame::packed(px, W, H, PixelFormat::Rgb888).unwrap()
+        }
+        let texture = blocks(0, 0);
+        assert!(grey_levels(&frame(&texture), &e));
+        let rgb565: Vec<u8> = texture.iter().flat_map(|&v| crate::pixel::rgb_to_rgb565([v, v, v])).collect();
+        assert!(grey_levels(&Frame::packed(&rgb565, W, H, PixelFormat::Rgb565).unwrap(), &e));
+        assert!(grey_levels(&rgb_frame(&rgb(&texture, &|_, _| false)), &e));
+        assert!(grey_levels(&rgb_frame(&rgb(&texture, &|x, _| x < 100)), &e));
+        assert!(!grey_levels(&rgb_frame(&rgb(&texture, &|_, y| (115..=125).contains(&y))), &e));
+        let c = GradientCue { pull: 0.5, grey_pull: 1.0, scale_step: 0.0, pyramid_pull: 0.0, ..GradientCue::MEASURED };
+        let grey = (texture.clone(), blocks(4, 3), PixelFormat::Gray8, c.grey_pull);
+        let colour = (rgb(&texture, &|_, _| true), rgb(&blocks(4, 3), &|_, _| true), PixelFormat::Rgb888, c.pull);
+        for (first, moved, format, pull) in [grey, colour] {
+            let mut f = GradientFilter::new();
+            f.start(Some(&c), &Frame::packed(&first, W, H, format).unwrap(), &e, lent().lend());
+            let moved = Frame::packed(&moved, W, H, format).unwrap();
+            let seen = f.look(&moved, (e.cx, e.cy), (e.hx, e.hy), lent().lend()).unwrap();
+            assert!(seen.at.0 > 2.0 && seen.at.1 > 1.5 && seen.psr >= c.min_psr, "{format:?}: {:?}", seen.at);
+            let (mut est, mut ps) = (e, [Particle::default(); 4]);
+            f.place(&c, &moved, (&mut est, &mut ps), Freedom::Position, lent().lend());
+            let moved_by = (est.cx - e.cx, est.cy - e.cy);
+            assert!((moved_by.0 - pull * seen.at.0).abs() < 1e-3, "{format:?}: {moved_by:?}, {:?}", seen.at);
+            assert!((moved_by.1 - pull * seen.at.1).abs() < 1e-3, "{format:?}: {moved_by:?}, {:?}", seen.at);
+        }
     }
 
     #[test]

@@ -177,6 +177,7 @@ pub(crate) fn validate_gradient(settings: Option<GradientCue>) -> Result<(), Con
         return Err(ConfigError { field: "gradient.learn_every", problem: crate::error::ParamProblem::OutOfRange });
     }
     check("gradient.pull", c.pull, 0.0, 1.0)?;
+    check("gradient.grey_pull", c.grey_pull, 0.0, 1.0)?;
     check("gradient.scale_step", c.scale_step, 0.0, 0.2)?;
     check("gradient.scale_pull", c.scale_pull, 0.0, 1.0)?;
     check("gradient.min_psr", c.min_psr, 0.0, 20.0)?;
@@ -239,6 +240,12 @@ pub struct GradientCue {
     /// The share of the way to the response's peak the estimate moves, in
     /// `[0, 1]`.
     pub pull: Real,
+    /// The same share on grey-level video, in `[0, 1]`: where every pixel
+    /// sampled over the window the filter first learns is a grey level
+    /// (red, green and blue equal in their top five bits: a mono camera's
+    /// GRAY8, or grey video in RGB565, RGB888 or YUV), the colour cues see
+    /// only brightness, and the filter's layout is trusted further.
+    pub grey_pull: Real,
     /// Relative size step of the scale search, in `[0, 0.2]` (0: none).
     pub scale_step: Real,
     /// The share of the way to the best scale the size moves, in `[0, 1]`.
@@ -276,9 +283,10 @@ impl GradientCue {
     /// The settings measured on the real sequences (docs/accuracy.md):
     /// learnt at 0.2 on every fourth frame whose confidence exceeds 0.7
     /// (a running mean as slow as 0.05 on every frame), a move 0.7 of the
-    /// way to the peak and a size 0.3 of the way to the best of three
-    /// scales 3% apart when the PSR reaches 3, no share of the particles'
-    /// similarities (a 0.3 share loses 0.04 on the check split), and a
+    /// way to the peak (0.85 on grey-level video) and a size 0.3 of the way
+    /// to the best of three scales 3% apart when the PSR reaches 3, no share
+    /// of the particles' similarities (a 0.3 share loses 0.04 on the check
+    /// split), and a
     /// frame more confident than 0.8 (the life cycle's default
     /// `found_above`) whose PSR is under 4 learnt at once (a turning target
     /// followed; the real sequences unchanged within their seeds' noise);
@@ -290,6 +298,7 @@ impl GradientCue {
         learn_above: 0.7,
         learn_every: 4,
         pull: 0.7,
+        grey_pull: 0.85,
         scale_step: 0.03,
         scale_pull: 0.3,
         min_psr: 3.0,

@@ -590,6 +590,8 @@ fn the_gradient_filter_needs_its_feature_and_sane_settings() {
         (GradientCue { learn_above: 1.5, ..m }, "gradient.learn_above", ParamProblem::OutOfRange),
         (GradientCue { learn_every: 0, ..m }, "gradient.learn_every", ParamProblem::OutOfRange),
         (GradientCue { pull: Real::INFINITY, ..m }, "gradient.pull", ParamProblem::NonFinite),
+        (GradientCue { grey_pull: 1.2, ..m }, "gradient.grey_pull", ParamProblem::OutOfRange),
+        (GradientCue { grey_pull: Real::NAN, ..m }, "gradient.grey_pull", ParamProblem::NonFinite),
         (GradientCue { scale_step: 0.5, ..m }, "gradient.scale_step", ParamProblem::OutOfRange),
         (GradientCue { scale_pull: -0.1, ..m }, "gradient.scale_pull", ParamProblem::OutOfRange),
         (GradientCue { min_psr: 21.0, ..m }, "gradient.min_psr", ParamProblem::OutOfRange),
