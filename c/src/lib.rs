@@ -214,7 +214,9 @@ struct Slot {
     // Read through the storage's first word, not by name.
     #[allow(dead_code)]
     magic: u64,
-    tracker: Option<Tracker<100>>,
+    /// The constructor's outcome, as it returned it.
+    made: Result<Tracker<100>, Error>,
+    /// The last call's error.
     error: Option<Error>,
 }
 
@@ -428,16 +430,24 @@ pub unsafe extern "C" fn pftrack_create(
     }
     // SAFETY: readable (the caller's promise).
     let c = unsafe { config.read() };
-    let made = config_of(&c).and_then(|cfg| Tracker::<100>::new(cfg, seed));
-    let (tracker, error, code) = match made {
-        Ok(tr) => (Some(tr), None, PFTRACK_OK),
-        Err(e) => (None, Some(e), code_of(&e)),
-    };
+    let slot = t.cast::<Slot>();
     // SAFETY: `t` is writable, large and aligned enough for a `Slot` (the
     // asserts above); its old contents need no drop (a `Slot` owns nothing
-    // outside itself).
-    unsafe { t.cast::<Slot>().write(Slot { magic: MAGIC, tracker, error }) };
-    code
+    // outside itself). Each field is written in place, the tracker straight
+    // from its constructor: built into a local and then moved, it took a
+    // second tracker's room on the stack.
+    let error = unsafe {
+        (&raw mut (*slot).magic).write(MAGIC);
+        let made = &raw mut (*slot).made;
+        match config_of(&c) {
+            Ok(cfg) => made.write(Tracker::<100>::new(cfg, seed)),
+            Err(e) => made.write(Err(e)),
+        }
+        let error = (*made).as_ref().err().copied();
+        (&raw mut (*slot).error).write(error);
+        error
+    };
+    error.map_or(PFTRACK_OK, |e| code_of(&e))
 }
 
 /// Runs `f` on the tracker in `t` and the frame `frame`.
@@ -458,9 +468,9 @@ unsafe fn with_frame<T>(
     // SAFETY: readable (the caller's promise).
     let f = unsafe { f.read() };
     // SAFETY: forwarded from the caller.
-    let r = unsafe { frame(&f) }.and_then(|frame| match slot.tracker.as_mut() {
-        Some(tracker) => run(tracker, &frame).map_err(|e| (code_of(&e), Some(e))),
-        None => Err((PFTRACK_ERR_CONFIG, slot.error)),
+    let r = unsafe { frame(&f) }.and_then(|frame| match slot.made.as_mut() {
+        Ok(tracker) => run(tracker, &frame).map_err(|e| (code_of(&e), Some(e))),
+        Err(e) => Err((PFTRACK_ERR_CONFIG, Some(*e))),
     });
     finish(slot, r)
 }
