@@ -434,8 +434,8 @@ pub unsafe extern "C" fn pftrack_create(
     // SAFETY: `t` is writable, large and aligned enough for a `Slot` (the
     // asserts above); its old contents need no drop (a `Slot` owns nothing
     // outside itself). Each field is written in place, the tracker straight
-    // from its constructor: built into a local and then moved, it took a
-    // second tracker's room on the stack.
+    // from its constructor: built into a local and then moved, it would take
+    // a second tracker's room on the stack.
     let error = unsafe {
         (&raw mut (*slot).magic).write(MAGIC);
         let made = &raw mut (*slot).made;

@@ -730,14 +730,14 @@ fn within(((cx, cy), read): ((Real, Real), (Real, Real)), e: &Ellipse, cell: (Re
 
 /// Whether every pixel on a [`LEARN`] x [`LEARN`] lattice from the learning
 /// window's top-left corner, a [`LEARN`]th of its side apart (rounded down
-/// to whole pixels, at least one), is a grey level: its red, green and blue agree in their
-/// top five bits, as a grey level does in every format (RGB565 keeps only
-/// those of red and blue; GRAY8 and YUV with U = V = 128 give R = G = B).
-/// That is a mono camera's frame, or grey video delivered in a colour
-/// format; colour video has pixels that differ by more than that. The
-/// window rather than the box, so that a grey target in a colour scene is
-/// not taken for grey video; points past the frame's edge are left out.
-/// Read once a target, when it is learnt.
+/// to whole pixels, at least one), is a grey level: its red, green and
+/// blue agree in their top five bits, as a grey level's do in every format
+/// (RGB565 keeps only those of red and blue; GRAY8 and YUV with U = V =
+/// 128 give R = G = B). That is a mono camera's frame, or grey video
+/// delivered in a colour format; colour video has pixels that differ by
+/// more than that. The window rather than the box, so that a grey target
+/// in a colour scene is not taken for grey video; points past the frame's
+/// edge are left out. Read once a target, when it is learnt.
 #[inline(never)]
 fn grey_levels(frame: &Frame<'_>, e: &Ellipse) -> bool {
     // The window's corner and the step between samples, in whole pixels
@@ -1224,10 +1224,9 @@ mod tests {
         // differ by up to 4) is grey video; a coloured band (blue halved)
         // through the window makes it colour, one outside the window (which
         // spans the centre ± 2.5 half axes, 120 to 200 px here) does not.
-        // On grey video the
-        // estimate moves `grey_pull` of the way to the response's peak, on
-        // colour video `pull` of it (shifts are exact: nothing is clamped
-        // this far inside the frame).
+        // On grey video the estimate moves `grey_pull` of the way to the
+        // response's peak, on colour video `pull` of it (shifts are exact:
+        // nothing is clamped this far inside the frame).
         let e = target();
         let rgb = |px: &[u8], tinted: &dyn Fn(usize, usize) -> bool| -> Vec<u8> {
             let pixel = |(i, &v): (usize, &u8)| if tinted(i % W, i / W) { [v, v, v / 2] } else { [v, v, v] };
