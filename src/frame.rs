@@ -222,8 +222,10 @@ impl<'a> Frame<'a> {
 
     /// The colour of pixel `(x, y)` as 8-bit RGB, or `None` outside the frame.
     ///
-    /// This is the slow, general accessor for tools and tests; the histogram
-    /// loops use the same conversion, compiled once per format, on whole rows.
+    /// This is the slow, general accessor, for tools, tests and reads of a
+    /// few pixels once a target (the gradient filter's grey-video test); the
+    /// histogram loops use the same conversion, compiled once per format, on
+    /// whole rows.
     pub fn rgb(&self, x: usize, y: usize) -> Option<[u8; 3]> {
         let row = self.row(y)?;
         if x >= self.width {

@@ -379,9 +379,10 @@ fn gradient(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
         [rate, above, every, pull, step, scale_pull, psr, blend, relearn_below, relearn_above, pyramid @ ..] => {
             // The pyramid's fields, off when left out; the pull on grey
             // video, the pull's when left out.
+            let pull = num(key, pull)?;
             let (pyramid_pull, pyramid_learn_above, grey_pull) = match pyramid {
-                [] => (0.0, 0.0, num(key, pull)?),
-                [p, a] => (num(key, p)?, num(key, a)?, num(key, pull)?),
+                [] => (0.0, 0.0, pull),
+                [p, a] => (num(key, p)?, num(key, a)?, pull),
                 [p, a, g] => (num(key, p)?, num(key, a)?, num(key, g)?),
                 _ => {
                     return Err(format!(
@@ -395,7 +396,7 @@ fn gradient(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
                 learn_every: every
                     .parse()
                     .map_err(|_| format!("{key}: `{every}`: LEARN_EVERY is a count from 1 to 255"))?,
-                pull: num(key, pull)?,
+                pull,
                 grey_pull,
                 scale_step: num(key, step)?,
                 scale_pull: num(key, scale_pull)?,

@@ -205,9 +205,8 @@ fn memory_does_not_grow_with_the_number_of_frames() {
     // what does grow per frame (`otb` keeps every box to score them, about
     // 0.4 KB a frame), the allocator's rounding, and what the peak
     // resident size counts beside the heap (the binary's own pages as they
-    // are mapped), which varies between runs: over five runs of this test
-    // `otb`'s peak for 44 frames was 7.0 to 7.3 MB and 440 frames measured
-    // 0.0 to 0.5 MB more, and once in CI 0.6 MB more. A frame
+    // are mapped), which varies between runs: `otb`'s peak for 44 frames
+    // measures 7.0 to 7.3 MB, and 440 frames 0.0 to 0.6 MB more. A frame
     // kept for each frame would still show: over the 396 extra frames of
     // these 128 x 96 scenes, 7 MB as I420 (`run`) and 15 MB as RGB
     // (`otb`).

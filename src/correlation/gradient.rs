@@ -745,12 +745,12 @@ fn grey_levels(frame: &Frame<'_>, e: &Ellipse) -> bool {
     let corner = ((e.cx - WINDOW * e.hx) as usize, (e.cy - WINDOW * e.hy) as usize);
     let step = |h: Real| ((2.0 * WINDOW * h / LEARN as Real) as usize).max(1);
     let (sx, sy) = (step(e.hx), step(e.hy));
-    (0..LEARN).all(|i| {
-        (0..LEARN).all(|j| {
-            let grey = |[r, g, b]: [u8; 3]| r >> 3 == g >> 3 && g >> 3 == b >> 3;
-            frame.rgb(corner.0 + j * sx, corner.1 + i * sy).is_none_or(grey)
-        })
-    })
+    let grey = |[r, g, b]: [u8; 3]| r >> 3 == g >> 3 && g >> 3 == b >> 3;
+    // Within a few frame sides for any box the tracker accepts; wrapping,
+    // so that no box could make it panic (a place past the frame reads
+    // nothing).
+    let at = |start: usize, k: usize, step: usize| start.wrapping_add(k.wrapping_mul(step));
+    (0..LEARN).all(|i| (0..LEARN).all(|j| frame.rgb(at(corner.0, j, sx), at(corner.1, i, sy)).is_none_or(grey)))
 }
 
 /// Blends a channel's cut filter `cut` into its weights, sum and scale at
