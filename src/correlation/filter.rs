@@ -36,6 +36,7 @@
 //! memory, used or not.
 
 use super::CorrelationCue;
+use super::integer_fft::{self, Int};
 use crate::cue::{Cue, Freedom};
 use crate::filter::{Particle, scale_estimate, shift_estimate};
 use crate::frame::Frame;
@@ -64,12 +65,32 @@ const PEAK_SIGMA: f64 = 1.0;
 /// Half a spectrum: `GRID` rows of columns 0 to `GRID / 2`.
 type Spectrum = [[Complex32; COLS]; GRID];
 
-/// The Hann taper `sin²(π (i + ½) / GRID)` of one axis, computed at
-/// compile time.
-const TAPER: [Real; GRID] = taper();
+/// A half spectrum in integers, laid out as [`Spectrum`] (the transform's
+/// view of the same memory).
+type IntSpectrum = [[Int; COLS]; GRID];
+
+/// The Hann taper `sin²(π (i + ½) / GRID)` of one axis in the units of
+/// [`integer_fft::times`]'s factors, 2^-15, rounded, computed at compile
+/// time: the transform tapers in integers.
+const TAPER_UNITS: [i32; GRID] = taper_units();
+
+// Evaluated at compile time only (for a `const`): an index out of range
+// would stop the build, never the device.
+#[allow(clippy::indexing_slicing)]
+const fn taper_units() -> [i32; GRID] {
+    let mut out = [0; GRID];
+    let mut i = 0;
+    while i < GRID {
+        let s = sin(core::f64::consts::PI * (i as f64 + 0.5) / GRID as f64);
+        out[i] = (s * s * integer_fft::ONE as f64 + 0.5) as i32;
+        i += 1;
+    }
+    out
+}
 
 /// The Hann taper `sin²(π (i + ½) / N)` of an axis of `N` lattice points
-/// (this filter's and the gradient filter's tables).
+/// (the gradient filter's table).
+#[cfg(feature = "gradient")]
 pub(super) const fn taper<const N: usize>() -> [Real; N] {
     sin_squared(0.5)
 }
@@ -588,24 +609,32 @@ fn row_value(row: &[Complex32; COLS], c: usize) -> Real {
 
 /// Reads the window around `e` into `work` and transforms it; false
 /// (nothing to correlate) for a window of one grey level.
+///
+/// The transform runs in integers ([`integer_fft`]): exact on every core,
+/// and a few dozen instructions a butterfly where the Cortex-M0+ would
+/// call its floating-point library for each operation. The samples are
+/// kept in 32nds of the table's unit, so that centring them on their mean
+/// rounded to that unit leaves a constant far below any window's spread
+/// that is not flat; the spectrum is then scaled to a window of unit
+/// energy in `f32`, as the filter keeps it.
 fn transform(work: &mut Spectrum, frame: &Frame<'_>, e: &Ellipse, padding: Real) -> bool {
     let (w, h) = (2.0 * e.hx * padding, 2.0 * e.hy * padding);
     let (x0, y0) = (e.cx - 0.5 * w, e.cy - 0.5 * h);
     let (xmax, ymax) = (frame.width().saturating_sub(1), frame.height().saturating_sub(1));
-    // The samples, row by row, two to a complex slot (the real FFT's
-    // input layout); points outside the frame repeat its edge. A sample's
-    // place: its sixteenths of the window (a multiplication rounds as the
-    // division by the power of two would) past the window's start.
+    // A sample's place: its sixteenths of the window (a multiplication
+    // rounds as the division by the power of two would) past the window's
+    // start; points outside the frame repeat its edge.
     let place =
         |at: Real, start: Real, side: Real, last: usize| index_within(start + at * side * (1.0 / GRID as Real), last);
     let mut columns = [0usize; GRID];
     for (x, &at) in columns.iter_mut().zip(HALF_STEPS.iter()) {
         *x = place(at, x0, w, xmax);
     }
-    // The sum and the sum of squares, exact: each sample is below 2^15,
-    // each square below 2^30.
+    let ints: &mut IntSpectrum = bytemuck::cast_mut(work);
+    // The samples, row by row, two to a slot; their sum and sum of
+    // squares, exact: each sample is below 2^15, each square below 2^30.
     let (mut s1, mut s2) = (0u32, 0u64);
-    for (row, &at) in work.iter_mut().zip(HALF_STEPS.iter()) {
+    for (row, &at) in ints.iter_mut().zip(HALF_STEPS.iter()) {
         let y = place(at, y0, h, ymax);
         let mut luma = [0u8; GRID];
         if let Some(pixels) = frame.row(y) {
@@ -617,7 +646,7 @@ fn transform(work: &mut Spectrum, frame: &Frame<'_>, e: &Ellipse, padding: Real)
                 let (a, b) = (log_luma(*a), log_luma(*b));
                 s1 += a + b;
                 s2 += (a * a) as u64 + (b * b) as u64;
-                *slot = Complex32::new(a as Real, b as Real);
+                *slot = Int::new(a as i32, b as i32);
             }
         }
     }
@@ -629,38 +658,48 @@ fn transform(work: &mut Spectrum, frame: &Frame<'_>, e: &Ellipse, padding: Real)
     if !(energy > 1e-6) {
         return false;
     }
-    // Exact: `s1 < 2^23`, and a division by 256 moves the exponent only.
-    let mean = s1 as Real / SAMPLES;
-    // Centred samples (still in the table's units) scale to unit energy.
-    let scale = 1.0 / (sqrt(energy) * LOG_LUMA_ONE);
-    // Each row: centred, scaled, tapered, then its real FFT, unpacked
-    // into columns 0 to GRID / 2 (the real FFT packs the last one's real
-    // value into the first's imaginary part).
-    for (row, &tr) in work.iter_mut().zip(TAPER.iter()) {
-        let row_scale = scale * tr;
-        let mut line = [0.0 as Real; GRID];
-        for (pair, slot) in line.chunks_exact_mut(2).zip(row.iter()) {
-            if let [a, b] = pair {
-                (*a, *b) = (slot.re, slot.im);
+    // The mean in 32nds of the table's unit, rounded (`s1 < 2^23`); each
+    // row's samples in those units, centred (below 2^20: the largest
+    // sample is 22,713 units), tapered by one rounded product a side
+    // (still below 2^20); then two rows at a time transformed, their
+    // spectra doubled ([`integer_fft::two_real`], below 2^25), columns 0
+    // to GRID / 2 kept.
+    let mean = ((s1 + 4) / 8) as i32;
+    let taper = |v: i32, tc: i32, tr: i32| integer_fft::times(integer_fft::times(32 * v - mean, tc), tr);
+    for (rows, tr) in ints.chunks_exact_mut(2).zip(TAPER_UNITS.chunks_exact(2)) {
+        let ([a, b], [ta, tb]) = (rows, tr) else { continue };
+        // Row a in the real parts, row b in the imaginary ones; each slot
+        // holds two samples of its row.
+        let mut z = [Int::new(0, 0); GRID];
+        for ((pair, (sa, sb)), tc) in z.chunks_exact_mut(2).zip(a.iter().zip(b.iter())).zip(TAPER_UNITS.chunks_exact(2))
+        {
+            if let ([z0, z1], [c0, c1]) = (pair, tc) {
+                *z0 = Int::new(taper(sa.re, *c0, *ta), taper(sb.re, *c0, *tb));
+                *z1 = Int::new(taper(sa.im, *c1, *ta), taper(sb.im, *c1, *tb));
             }
         }
-        for (v, &tc) in line.iter_mut().zip(TAPER.iter()) {
-            *v = (*v - mean) * row_scale * tc;
+        integer_fft::two_real(&mut z, a, b);
+    }
+    // Then each column (values below 2^25 in, 2^29 out).
+    for c in 0..COLS {
+        let mut col = [Int::new(0, 0); GRID];
+        for (v, row) in col.iter_mut().zip(ints.iter()) {
+            *v = row.get(c).copied().unwrap_or_default();
         }
-        let spectrum = microfft::real::rfft_16(&mut line);
-        let (dc, nyquist) = (spectrum[0].re, spectrum[0].im);
-        for (slot, v) in row.iter_mut().zip(spectrum.iter()) {
-            *slot = *v;
-        }
-        if let Some(first) = row.first_mut() {
-            *first = Complex32::new(dc, 0.0);
-        }
-        if let Some(last) = row.last_mut() {
-            *last = Complex32::new(nyquist, 0.0);
+        integer_fft::forward(&mut col);
+        for (v, row) in col.iter().zip(ints.iter_mut()) {
+            if let Some(slot) = row.get_mut(c) {
+                *slot = *v;
+            }
         }
     }
-    // Then each column.
-    transform_columns(work, microfft::complex::cfft_16);
+    // To a window of unit energy: the samples were in 32nds of the
+    // table's unit, and their rows' spectra doubled.
+    let unit = 1.0 / (64.0 * sqrt(energy) * LOG_LUMA_ONE);
+    for slot in work.iter_mut().flatten() {
+        let v: Int = bytemuck::cast(*slot);
+        *slot = Complex32::new(v.re as Real * unit, v.im as Real * unit);
+    }
     true
 }
 
@@ -851,9 +890,10 @@ mod tests {
         // Reason: the tables are computed by hand-written series at
         // compile time; std's sin, ln, exp and cos, and the DFT's
         // definition, are the independent reference.
-        for (i, &t) in TAPER.iter().enumerate() {
+        for (i, &t) in TAPER_UNITS.iter().enumerate() {
             let s = (std::f64::consts::PI * (i as f64 + 0.5) / GRID as f64).sin();
-            assert!((t as f64 - s * s).abs() < 1e-6, "taper {i}: {t} against {}", s * s);
+            let e = s * s * integer_fft::ONE as f64;
+            assert!((t as f64 - e).abs() <= 0.5, "taper {i}: {t} against {e}");
         }
         for (l, &v) in LOG_LUMA.iter().enumerate() {
             // Rounded to the nearest unit of 2^-12.
@@ -878,8 +918,8 @@ mod tests {
 
     #[test]
     fn the_half_spectrum_is_the_direct_dft_of_the_window() {
-        // Reason: a cross-check of the packed real FFT, the unpacking of
-        // its last column and the column FFTs against the DFT's definition,
+        // Reason: a cross-check of the integer transform of the rows and
+        // columns and its scaling against the DFT's definition,
         // summed directly in f64 over samples prepared as the module's doc
         // says (nearest pixel, log-luma, unit energy, Hann taper). The
         // window's mean and energy come from exact integer sums there, in
@@ -921,9 +961,14 @@ mod tests {
                 largest = largest.max(re.hypot(im));
             }
         }
-        // f32 against f64: a few units of f32's precision (1.2e-7) of the
-        // largest bin per butterfly stage.
-        assert!(worst < 1e-5 * largest, "largest difference from the direct DFT: {worst} (largest bin {largest})");
+        // Integers against f64: the transform's factors are rounded to
+        // 2^-16 of one, a relative error of at most that per product, over
+        // eight stages (the samples' and the mean's rounding, in 64ths of
+        // the table's unit, are below 1e-6 of this window's spread).
+        assert!(
+            worst < 8.0 * 2f64.powi(-16) * largest,
+            "largest difference from the direct DFT: {worst} (largest bin {largest})"
+        );
     }
 
     #[test]

@@ -10,6 +10,8 @@ mod channels;
 mod filter;
 #[cfg(feature = "gradient")]
 mod gradient;
+#[cfg(feature = "correlation")]
+mod integer_fft;
 #[cfg(feature = "scale-pyramid")]
 mod pyramid;
 
