@@ -963,7 +963,7 @@ mod tests {
         }
         // Integers against f64: the transform's factors are rounded to
         // 2^-16 of one, a relative error of at most that per product, over
-        // eight stages (the samples' and the mean's rounding, in 64ths of
+        // eight stages (the samples' and the mean's rounding, in 32nds of
         // the table's unit, are below 1e-6 of this window's spread).
         assert!(
             worst < 8.0 * 2f64.powi(-16) * largest,
