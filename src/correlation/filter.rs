@@ -411,40 +411,44 @@ impl CorrelationFilter {
         if !self.product(work, frame, e, padding) {
             return None;
         }
+        let (work, unit) = to_integers(work)?;
         // Inverse along the columns: each row then holds the half spectrum
         // of one row of the (real) response.
-        transform_columns(work, microfft::inverse::ifft_16);
+        transform_columns(work, integer_fft::inverse);
         // Then along the rows, two at a time: rows a and b of a real
-        // response have Hermitian spectra, so one inverse FFT of
+        // response have Hermitian spectra, so one inverse transform of
         // `X_a + i X_b` (each mirrored from its half) returns row a in the
         // real part and row b in the imaginary part. The response is stored
         // back two values to a slot (the half spectra are no longer
         // needed); running sums give the PSR.
-        let keep = FROM_CENTRE.map(|d| 1.0 - centre_bias * d);
-        let (mut best, mut weighed, mut at) = (Real::MIN, Real::MIN, (0usize, 0usize));
-        let (mut s1, mut s2) = (0.0 as Real, 0.0 as Real);
+        let keep = FROM_CENTRE.map(|d| integer_fft::units(1.0 - centre_bias * d));
+        let (mut best, mut weighed, mut at) = (i32::MIN, i32::MIN, (0usize, 0usize));
+        let (mut s1, mut s2) = (0i64, 0i64);
         for (pair_index, rows) in work.chunks_exact_mut(2).enumerate() {
             let [a, b] = rows else { continue };
-            let mut full = [Complex32::new(0.0, 0.0); GRID];
+            let mut full = [Int::new(0, 0); GRID];
             for (k, v) in full.iter_mut().enumerate() {
                 let bin = k.min(GRID - k);
                 let (xa, xb) = (a.get(bin).copied().unwrap_or_default(), b.get(bin).copied().unwrap_or_default());
                 let (xa, xb) = if k > GRID / 2 { (xa.conj(), xb.conj()) } else { (xa, xb) };
-                *v = xa + Complex32::new(-xb.im, xb.re);
+                *v = xa + Int::new(-xb.im, xb.re);
             }
-            let full = microfft::inverse::ifft_16(&mut full);
+            integer_fft::inverse(&mut full);
             for (half, row) in [a, b].into_iter().enumerate() {
                 let r = 2 * pair_index + half;
-                let keep_row = keep.get(r).copied().unwrap_or(0.0);
+                let keep_row = keep.get(r).copied().unwrap_or(0);
                 for (c, (pair, slot)) in full.chunks_exact(2).zip(row.iter_mut()).enumerate() {
                     if let [p, q] = pair {
                         let (u, v) = if half == 0 { (p.re, q.re) } else { (p.im, q.im) };
-                        *slot = Complex32::new(u, v);
+                        *slot = Int::new(u, v);
                         for (k, v) in [u, v].into_iter().enumerate() {
-                            s1 += v;
-                            s2 += v * v;
+                            // Squares of a sixteenth of each value: below
+                            // 2^50, their sum below 2^58.
+                            s1 += v as i64;
+                            s2 += (v as i64 >> 4) * (v as i64 >> 4);
                             let col = 2 * c + k;
-                            let w = v * keep_row * keep.get(col).copied().unwrap_or(0.0);
+                            let keep_col = keep.get(col).copied().unwrap_or(0);
+                            let w = integer_fft::times(integer_fft::times(v, keep_row), keep_col);
                             if w > weighed {
                                 (best, weighed, at) = (v, w, (r, col));
                             }
@@ -458,17 +462,19 @@ impl CorrelationFilter {
         let work = &*work;
         let value = |r: usize, c: usize| {
             let (r, c) = (r % GRID, c % GRID);
-            work.get(r).and_then(|row| row.get(c / 2)).map_or(0.0, |v| if c % 2 == 0 { v.re } else { v.im })
+            work.get(r).and_then(|row| row.get(c / 2)).map_or(0, |v| if c % 2 == 0 { v.re } else { v.im }) as Real
         };
-        let dr = sub_cell(value(r + GRID - 1, c), best, value(r + 1, c));
-        let dc = sub_cell(value(r, c + GRID - 1), best, value(r, c + 1));
+        let peak = best as Real;
+        let dr = sub_cell(value(r + GRID - 1, c), peak, value(r + 1, c));
+        let dc = sub_cell(value(r, c + GRID - 1), peak, value(r, c + 1));
         // The lattice point past the middle is a negative shift (wrapped).
         let signed = |i: usize| if i > GRID / 2 { i as Real - GRID as Real } else { i as Real };
         let (sx, sy) = cell(e, padding);
-        let mean = s1 / SAMPLES;
-        let sd = sqrt((s2 / SAMPLES - mean * mean).max(0.0));
-        let psr = if sd > 0.0 { (best - mean) / sd } else { 0.0 };
-        Some(Response { peak: best, shift: ((signed(c) + dc) * sx, (signed(r) + dr) * sy), psr })
+        // The PSR in the integers' units (it has none of its own).
+        let mean = s1 as Real / SAMPLES;
+        let sd = sqrt((s2 as Real * (16.0 * 16.0 / SAMPLES) - mean * mean).max(0.0));
+        let psr = if sd > 0.0 { (peak - mean) / sd } else { 0.0 };
+        Some(Response { peak: peak * unit, shift: ((signed(c) + dc) * sx, (signed(r) + dr) * sy), psr })
     }
 
     /// The highest response of the window around `e` within a lattice
@@ -493,17 +499,18 @@ impl CorrelationFilter {
         if !self.product(work, frame, e, padding) {
             return None;
         }
-        transform_columns(work, microfft::inverse::ifft_16);
+        let (work, unit) = to_integers(work)?;
+        transform_columns(work, integer_fft::inverse);
         let (sx, sy) = cell(e, padding);
         let (r, c) = (lattice_point(at.1 / sy), lattice_point(at.0 / sx));
-        let mut best = Real::MIN;
+        let mut best = i32::MIN;
         for dr in [GRID - 1, 0, 1] {
             let Some(row) = work.get((r + dr) % GRID) else { continue };
             for dc in [GRID - 1, 0, 1] {
                 best = best.max(row_value(row, (c + dc) % GRID));
             }
         }
-        Some(best)
+        Some(best as Real * unit)
     }
 
     /// Reads the window around `e` into `work` as the product of its
@@ -568,43 +575,24 @@ fn lattice_point(cells: Real) -> usize {
     round(cells).rem_euclid(GRID as i32) as usize
 }
 
-/// `cos` and `sin` of `2π k / GRID`, computed at compile time: the inverse
-/// transform's factors for one point.
-const TURNS: [(Real, Real); GRID] = turns();
-
-// Evaluated at compile time only (for a `const`): an index out of range
-// would stop the build, never the device.
-#[allow(clippy::indexing_slicing)]
-const fn turns() -> [(Real, Real); GRID] {
-    use core::f64::consts::{FRAC_PI_2, TAU};
-    let mut out = [(0.0, 0.0); GRID];
-    let mut k = 0;
-    while k < GRID {
-        let a = TAU * k as f64 / GRID as f64;
-        // cos θ = sin(θ + π/2).
-        out[k] = (sin(a + FRAC_PI_2) as Real, sin(a) as Real);
-        k += 1;
-    }
-    out
-}
-
 /// The value at column `c` of a real row of the response from the row's
-/// half spectrum `row`: one point of its inverse transform,
-/// `Σ X(v) e^{2πi v c / GRID} / GRID` over the whole spectrum. Columns 1 to
-/// `GRID / 2 − 1` stand for their conjugate mirrors too, so they count
-/// twice (their real part: the sum is real).
-fn row_value(row: &[Complex32; COLS], c: usize) -> Real {
-    let (mut edge, mut inner) = (0.0 as Real, 0.0 as Real);
+/// half spectrum `row`: one point of its inverse transform (unscaled, as
+/// [`integer_fft::inverse`]), `Σ X(v) e^{2πi v c / GRID}` over the whole
+/// spectrum. Columns 1 to `GRID / 2 − 1` stand for their conjugate mirrors
+/// too, so they count twice (their real part: the sum is real). Entries
+/// below 2^24 give terms below 2^24 and a sum below 2^29.
+fn row_value(row: &[Int; COLS], c: usize) -> i32 {
+    let (mut edge, mut inner) = (0, 0);
     for (v, x) in row.iter().enumerate() {
-        let (cos, sin) = TURNS.get((v * c) % GRID).copied().unwrap_or_default();
-        let term = x.re * cos - x.im * sin;
+        let (cos, sin) = integer_fft::turn(v * c);
+        let term = integer_fft::times(x.re, cos) - integer_fft::times(x.im, sin);
         if v == 0 || v == GRID / 2 {
             edge += term;
         } else {
             inner += term;
         }
     }
-    (edge + 2.0 * inner) / GRID as Real
+    edge + 2 * inner
 }
 
 /// Reads the window around `e` into `work` and transforms it; false
@@ -705,19 +693,50 @@ fn transform(work: &mut Spectrum, frame: &Frame<'_>, e: &Ellipse, padding: Real)
 
 /// Transforms each of the spectrum's columns in place by `fft` (forward or
 /// inverse, over the rows).
-fn transform_columns(work: &mut Spectrum, fft: fn(&mut [Complex32; GRID]) -> &mut [Complex32; GRID]) {
+fn transform_columns(work: &mut IntSpectrum, fft: fn(&mut [Int; GRID])) {
     for c in 0..COLS {
-        let mut col = [Complex32::new(0.0, 0.0); GRID];
+        let mut col = [Int::new(0, 0); GRID];
         for (v, row) in col.iter_mut().zip(work.iter()) {
             *v = row.get(c).copied().unwrap_or_default();
         }
-        let col = fft(&mut col);
+        fft(&mut col);
         for (v, row) in col.iter().zip(work.iter_mut()) {
             if let Some(slot) = row.get_mut(c) {
                 *slot = *v;
             }
         }
     }
+}
+
+/// The response's spectrum `work` in integers, in place: each entry times
+/// the power of two that brings the largest below 2^20 (so that the
+/// inverse transforms stay below 2^29), truncated; and the unit of the
+/// response the integers then give (that power's inverse, over the two
+/// inverse transforms' `GRID` each). Read from the entries' bits: no
+/// floating-point operation (a library call each on the Cortex-M0+).
+/// `None` for a spectrum that is all zeros, negligible (below 2^-100) or
+/// not finite.
+fn to_integers(work: &mut Spectrum) -> Option<(&mut IntSpectrum, Real)> {
+    // The entries' bits, one word each.
+    let words: &mut [[u32; 2 * COLS]; GRID] = bytemuck::cast_mut(work);
+    let largest = words.iter().flatten().fold(0, |m, &b| m.max((b >> 23) & 0xff));
+    if !(28..255).contains(&largest) {
+        return None;
+    }
+    // `v = m · 2^(e − 150)`, `m` its 24-bit significand; times `2^shift`,
+    // the largest `e` gives below `2^(24 + largest − 150 + shift)` = 2^20.
+    let shift = 146 - largest as i32;
+    for b in words.iter_mut().flatten() {
+        let e = ((*b >> 23) & 0xff) as i32;
+        let m = ((*b & 0x7f_ffff) | 0x80_0000) as i32;
+        // At least 4 places right (the largest's), 0 past 31 and for zero.
+        let right = 150 - e - shift;
+        let magnitude = if e == 0 || right > 31 { 0 } else { m >> right };
+        *b = if *b >> 31 == 1 { -magnitude } else { magnitude } as u32;
+    }
+    // `2^-shift / GRID²`: the exponent field of 2^-shift, over 2^8.
+    let unit = Real::from_bits(((127 - shift - 8) as u32) << 23);
+    Some((bytemuck::cast_mut(words), unit))
 }
 
 /// `ln(1 + l)` in the table's units.
@@ -1042,7 +1061,7 @@ mod tests {
     #[test]
     fn the_peak_near_a_shift_is_the_whole_responses_peak_there() {
         // Reason: a cross-check of two inverse transforms. `respond` runs
-        // microfft's inverse over rows and columns and scans every value;
+        // the integer inverse over rows and columns and scans every value;
         // `peak_near` runs it over the columns and sums three rows by hand
         // at three columns. About the whole response's peak (its sub-cell
         // shift rounds to the peak's lattice point) both must find the
@@ -1144,6 +1163,43 @@ mod tests {
                 "moved by ({dx}, {dy}), found {:?}",
                 r.shift
             );
+        }
+    }
+
+    #[test]
+    fn the_response_spectrum_in_integers_keeps_twenty_bits_of_the_largest() {
+        // Reason: a cross-check of the bit-level conversion against f64
+        // arithmetic: each entry's integer times the unit (with the two
+        // inverse transforms' 16 each undone) is the entry to within one
+        // unit of 2^-20 of the largest, the largest is below 2^20, and a
+        // spectrum of zeros, or with a NaN or an infinity, gives nothing.
+        let mut work = EMPTY;
+        let mut s = 12345u32;
+        for (i, v) in work.iter_mut().flatten().enumerate() {
+            let mut next = || {
+                s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                (s >> 8) as f32 / (1 << 24) as f32 - 0.5
+            };
+            // Entries over six orders of magnitude, both signs.
+            let scale = 10f32.powi((i % 7) as i32 - 3);
+            *v = Complex32::new(next() * scale, next() * scale);
+        }
+        let original = work;
+        let largest = original.iter().flatten().fold(0.0f64, |m, v| m.max(v.re.abs() as f64).max(v.im.abs() as f64));
+        let (ints, unit) = to_integers(&mut work).unwrap();
+        let back = unit as f64 * (GRID * GRID) as f64;
+        for (i, f) in ints.iter().flatten().zip(original.iter().flatten()) {
+            for (a, b) in [(i.re, f.re), (i.im, f.im)] {
+                assert!(a.abs() < 1 << 20, "{a} from {b}");
+                assert!((a as f64 * back - b as f64).abs() <= largest * 2f64.powi(-19), "{a} x {back} against {b}");
+            }
+        }
+        for bad in [0.0, f32::NAN, f32::INFINITY] {
+            let mut work = EMPTY;
+            if let Some(v) = work.first_mut().and_then(|row| row.first_mut()) {
+                *v = Complex32::new(bad, 0.0);
+            }
+            assert!(to_integers(&mut work).is_none(), "{bad}");
         }
     }
 

@@ -40,15 +40,22 @@ const fn factors() -> [(i32, i32); N / 2] {
     while k < N / 2 {
         let a = TAU * k as f64 / N as f64;
         // cos θ = sin(θ + π/2).
-        out[k] = (units(super::filter::sin(a + FRAC_PI_2)), units(super::filter::sin(a)));
+        out[k] = (units_f64(super::filter::sin(a + FRAC_PI_2)), units_f64(super::filter::sin(a)));
         k += 1;
     }
     out
 }
 
 /// `v` in units of 2^-15, rounded (halves away from zero), at compile time.
-const fn units(v: f64) -> i32 {
+pub(super) const fn units_f64(v: f64) -> i32 {
     if v >= 0.0 { (v * ONE as f64 + 0.5) as i32 } else { -((-v * ONE as f64 + 0.5) as i32) }
+}
+
+/// `v` (in `[−1, 1]`) in units of 2^-15, rounded (halves away from zero);
+/// 0 for NaN.
+pub(super) fn units(v: crate::scalar::Real) -> i32 {
+    let scaled = v * ONE as crate::scalar::Real;
+    if scaled >= 0.0 { (scaled + 0.5) as i32 } else { -((0.5 - scaled) as i32) }
 }
 
 /// `a · w / 2^15`, rounded to the nearest integer (halves up), exactly,
@@ -71,8 +78,10 @@ fn wide(a: i32, w: i32) -> i32 {
 
 /// [`times`] in 32-bit products: with `a = h · 2^16 + l`, `0 ≤ l < 2^16`,
 /// the high part's product is a multiple of 2^15 below 2^30, and the low
-/// part's is below 2^31 − 2^15 in magnitude.
-#[inline(always)]
+/// part's is below 2^31 − 2^15 in magnitude. Out of line: the Cortex-M0+
+/// build's code is near its budget, and a call costs a few instructions a
+/// product.
+#[inline(never)]
 fn split(a: i32, w: i32) -> i32 {
     let (high, low) = (a >> 16, a & 0xffff);
     ((high * w) << (16 - SHIFT)) + ((low * w + (1 << (SHIFT - 1))) >> SHIFT)
@@ -122,6 +131,27 @@ fn stage<const SIZE: usize>(x: &mut [Int; N]) {
             (*a, *b) = (*a + t, *a - t);
         }
     }
+}
+
+/// The inverse transform of `x` in place, unscaled: `x(n) = Σ X(k)
+/// e^{2πi nk/N}` (`N` times `microfft`'s inverse), the conjugate of the
+/// forward transform of `X`'s conjugate. Bounds as [`forward`]'s.
+pub(super) fn inverse(x: &mut [Int; N]) {
+    for v in x.iter_mut() {
+        v.im = -v.im;
+    }
+    forward(x);
+    for v in x.iter_mut() {
+        v.im = -v.im;
+    }
+}
+
+/// `(cos, sin)` of `2π k / N` in units of 2^-15, for any `k`.
+#[inline(always)]
+pub(super) fn turn(k: usize) -> (i32, i32) {
+    let (c, s) = FACTORS.get(k % (N / 2)).copied().unwrap_or((ONE, 0));
+    // Half a turn on: both negated.
+    if k % N >= N / 2 { (-c, -s) } else { (c, s) }
 }
 
 /// `v · (−i)`.
@@ -249,6 +279,36 @@ mod tests {
             // Each side's rounding: half a unit a product, ten complex
             // products on the way to an output, twice over.
             assert!(d.re.abs() <= 40 && d.im.abs() <= 40, "{alone} doubled against {shared}");
+        }
+    }
+
+    /// The inverse against `microfft`'s, which divides by `N`: the same
+    /// values times `N`, to within the factors' rounding.
+    #[test]
+    fn the_inverse_matches_microffts_times_n() {
+        let mut next = values(9, (1 << 20) - 1);
+        let mut ints = [Int::new(0, 0); N];
+        for v in ints.iter_mut() {
+            *v = Int::new(next(), next());
+        }
+        let mut floats = ints.map(|v| Complex32::new(v.re as f32, v.im as f32));
+        inverse(&mut ints);
+        let floats = microfft::inverse::ifft_16(&mut floats);
+        let largest = floats.iter().fold(0.0f32, |m, v| m.max(v.re.abs()).max(v.im.abs())) * N as f32;
+        for (i, f) in ints.iter().zip(floats.iter()) {
+            for (a, b) in [(i.re, f.re), (i.im, f.im)] {
+                assert!((a as f32 - b * N as f32).abs() <= 4.0 + 4e-4 * largest, "{a} against {b} x {N}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_turn_is_the_unit_circle_at_any_step() {
+        for k in 0..3 * N {
+            let a = core::f64::consts::TAU * k as f64 / N as f64;
+            let (c, s) = turn(k);
+            assert!((c as f64 - a.cos() * ONE as f64).abs() <= 0.5, "cos {k}");
+            assert!((s as f64 - a.sin() * ONE as f64).abs() <= 0.5, "sin {k}");
         }
     }
 }
