@@ -20,7 +20,7 @@
 //! 255. Every step is in integers and tables, so that a core without an FPU
 //! reads a window as fast as one with it.
 
-use super::filter::ln_1p;
+use super::series::ln_1p;
 use crate::frame::Frame;
 use crate::pixel::{self, Loop, Loops, PixelRead, RowReader};
 use crate::scalar::{Real, index_within};

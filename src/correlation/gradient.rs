@@ -43,9 +43,10 @@
 
 use super::GradientCue;
 use super::channels::{self, CHANNELS, MAX_CELLS};
-use super::filter::{peak, round, sin, sub_cell, taper};
+use super::filter::{peak, round, sub_cell, taper};
 #[cfg(feature = "scale-pyramid")]
 use super::pyramid::ScalePyramid;
+use super::series::sin;
 use crate::cue::{Cue, Freedom};
 use crate::filter::{Particle, scale_estimate, shift_estimate};
 use crate::frame::Frame;

@@ -40,7 +40,7 @@ const fn factors() -> [(i32, i32); N / 2] {
     while k < N / 2 {
         let a = TAU * k as f64 / N as f64;
         // cos θ = sin(θ + π/2).
-        out[k] = (units_f64(super::filter::sin(a + FRAC_PI_2)), units_f64(super::filter::sin(a)));
+        out[k] = (units_f64(super::series::sin(a + FRAC_PI_2)), units_f64(super::series::sin(a)));
         k += 1;
     }
     out

@@ -14,6 +14,8 @@ mod gradient;
 mod integer_fft;
 #[cfg(feature = "scale-pyramid")]
 mod pyramid;
+#[cfg(feature = "correlation")]
+mod series;
 
 #[cfg(not(all(feature = "correlation", feature = "gradient")))]
 use crate::cue::Absent;
