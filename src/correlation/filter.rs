@@ -79,11 +79,11 @@ const TAPER_UNITS: [i32; GRID] = taper_units();
 // would stop the build, never the device.
 #[allow(clippy::indexing_slicing)]
 const fn taper_units() -> [i32; GRID] {
+    let taper = sin_squared::<GRID>(0.5);
     let mut out = [0; GRID];
     let mut i = 0;
     while i < GRID {
-        let s = sin(core::f64::consts::PI * (i as f64 + 0.5) / GRID as f64);
-        out[i] = (s * s * integer_fft::ONE as f64 + 0.5) as i32;
+        out[i] = integer_fft::units_f64(taper[i] as f64);
         i += 1;
     }
     out
@@ -610,18 +610,7 @@ fn transform(work: &mut Spectrum, frame: &Frame<'_>, e: &Ellipse, padding: Real)
         integer_fft::two_real(&mut z, a, b);
     }
     // Then each column (values below 2^25 in, 2^29 out).
-    for c in 0..COLS {
-        let mut col = [Int::new(0, 0); GRID];
-        for (v, row) in col.iter_mut().zip(ints.iter()) {
-            *v = row.get(c).copied().unwrap_or_default();
-        }
-        integer_fft::forward(&mut col);
-        for (v, row) in col.iter().zip(ints.iter_mut()) {
-            if let Some(slot) = row.get_mut(c) {
-                *slot = *v;
-            }
-        }
-    }
+    transform_columns(ints, integer_fft::forward);
     // To a window of unit energy: the samples were in 32nds of the
     // table's unit, and their rows' spectra doubled.
     let unit = 1.0 / (64.0 * sqrt(energy) * LOG_LUMA_ONE);
