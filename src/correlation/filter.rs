@@ -25,10 +25,11 @@
 //! columns 0 to `GRID / 2` of it are kept (9 of 16); the Gaussian peak is
 //! separable and even, so its spectrum is the outer product of one real
 //! vector with itself, a table computed at compile time. `A` and `B` are
-//! kept in `f32` (the FFTs are `microfft`'s, `f32` like [`Real`]), packed
-//! as `CorrelationFilter` says; the working spectrum, a whole half
-//! spectrum, lives on the stack while a window is read (the RAM and stack
-//! they take: audit/budgets.txt).
+//! kept in `f32` (running means, [`Real`] like the tracker's other
+//! scalars; the transforms are in integers, [`integer_fft`]), packed as
+//! `CorrelationFilter` says; the working spectrum, a whole half spectrum,
+//! lies in memory the tracker lends while a window is read (the RAM and
+//! stack they take: audit/budgets.txt).
 //! A 16-point lattice rather than 32: a quarter of the memory and of the
 //! work, for the same accuracy over the recorded sequences (higher on the
 //! tune split, a little lower on check; docs/accuracy.md). Built with the
@@ -44,7 +45,7 @@ use crate::frame::Frame;
 use crate::geometry::Ellipse;
 use crate::pixel::{self, Loop, Loops, PixelRead, RowReader};
 use crate::scalar::{Real, half_steps, index_within, sqrt};
-use microfft::Complex32;
+use num_complex::Complex32;
 
 /// Lattice points per side of the window (a power of two, for the FFT).
 pub const GRID: usize = 16;
@@ -252,7 +253,7 @@ fn slot(r: usize, c: usize) -> Slot {
     Slot { row, col, part, mirrored }
 }
 
-/// A zero spectrum: the working spectrum's start (it lives on the stack
+/// A zero spectrum: the working spectrum's start (it lies in lent memory
 /// while the filter reads a window: the tracker need not keep it).
 const EMPTY: Spectrum = [[Complex32::new(0.0, 0.0); COLS]; GRID];
 
