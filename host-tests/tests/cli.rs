@@ -139,6 +139,53 @@ fn score_pairs_runs_and_reports_their_spread() {
 }
 
 #[test]
+fn score_tabulates_each_sequence_and_its_spread_between_runs() {
+    // Reason: by hand, as above: a 10x10 target at the origin over two
+    // frames; an exact box is above 20 of the 21 thresholds, one twice the
+    // size (IoU 1/4) above 5. Sequence `near`: set `a` exact in run 1
+    // (40/42) and twice the size in run 2's second frame (25/42): mean
+    // 65/84 = 0.774, spread 15/42 = 0.357; set `c` (run 1 alone) 0.952,
+    // no spread. Sequence `far`: both runs exact, 0.952 (0.000). The split
+    // file puts `near` in tune and `far` in check.
+    let dir = std::env::temp_dir().join(format!("pftrack-cli-per-sequence-{}", std::process::id()));
+    for d in ["near", "far", "a1", "a2"] {
+        std::fs::create_dir_all(dir.join(d)).unwrap();
+    }
+    for seq in ["near", "far"] {
+        std::fs::write(dir.join(seq).join("groundtruth.txt"), "0,0,10,10\n".repeat(2)).unwrap();
+        std::fs::write(dir.join("a1").join(format!("{seq}.txt")), "0,0,10,10\n0,0,10,10\n").unwrap();
+    }
+    std::fs::write(dir.join("a2/near.txt"), "0,0,10,10\n-5,-5,20,20\n").unwrap();
+    std::fs::write(dir.join("a2/far.txt"), "0,0,10,10\n0,0,10,10\n").unwrap();
+    std::fs::write(dir.join("split.txt"), "tune: near\ncheck: far\n").unwrap();
+    let a = format!("a={},{}", dir.join("a1").display(), dir.join("a2").display());
+    let c = format!("c={}", dir.join("a1").display());
+    let (near, far, split, plots) = (dir.join("near"), dir.join("far"), dir.join("split.txt"), dir.join("plots"));
+    let args = [
+        "score",
+        "--truth",
+        near.to_str().unwrap(),
+        far.to_str().unwrap(),
+        "--plots",
+        plots.to_str().unwrap(),
+        "--split",
+        split.to_str().unwrap(),
+        "--results",
+        &a,
+        &c,
+    ];
+    let (ok, stdout, stderr) = track(&[&args[..], &["--per-sequence"]].concat());
+    assert!(ok, "{stderr}");
+    assert!(stdout.contains("| sequence | split | a | c |"), "{stdout}");
+    assert!(stdout.contains("| near | tune | 0.774 (0.357) | 0.952 |"), "{stdout}");
+    assert!(stdout.contains("| far | check | 0.952 (0.000) | 0.952 |"), "{stdout}");
+    // Without the flag, no such table.
+    let (ok, stdout, stderr) = track(&args);
+    assert!(ok && !stdout.contains("Per sequence"), "{stderr}{stdout}");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
 fn score_ranks_missing_frames_by_each_trackers_confidence() {
     // Reason: by hand, a 10x10 target at the origin over five frames. The
     // first box is given, not tracked: it is left out though it misses.

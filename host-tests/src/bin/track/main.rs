@@ -148,6 +148,11 @@ enum Command {
         /// mean AUC column for each split besides the overall one.
         #[arg(long)]
         split: Option<PathBuf>,
+        /// Also a table of each sequence's AUC per set (the mean over its
+        /// runs) and, for a set of several runs, how far apart its runs
+        /// are on that sequence (the highest run's AUC less the lowest's).
+        #[arg(long)]
+        per_sequence: bool,
     },
     /// Prints the twelve changed first boxes of `ablate --sre`, one
     /// DX,DY,SCALE per line, as `--perturb` takes them.
@@ -202,12 +207,12 @@ fn main() -> ExitCode {
     let (paths, mut common, ablation) = match cli.command {
         Command::Convert { input, output, raw } => return report(convert::command(&input, &output, raw)),
         Command::Run(args) => return report(run::command(&args)),
-        Command::Score { truth, results, plots, split } => {
+        Command::Score { truth, results, plots, split, per_sequence } => {
             let split = match split.as_deref().map(Split::load).transpose() {
                 Ok(s) => s,
                 Err(e) => return report(Err(e)),
             };
-            return report(score::command(&truth, &results, &plots, split.as_ref()));
+            return report(score::command(&truth, &results, &plots, split.as_ref(), per_sequence));
         }
         Command::Starts => {
             starts::command();

@@ -104,6 +104,7 @@ pub(crate) fn command(
     results: &[String],
     plots: &Path,
     split: Option<&Split>,
+    per_sequence: bool,
 ) -> Result<(), String> {
     // Each target's truth with the name of its result files: the folder's
     // name, or `<name>.<N>` for its groundtruth.N.txt, as `track otb`
@@ -233,10 +234,59 @@ pub(crate) fn command(
         let auc = per_seq.iter().sum::<f64>() / per_seq.len().max(1) as f64;
         println!("| {} | {auc:.3} | {size:.3} ({:+.3}) | {centre:.3} ({:+.3}) |", r.name, size - auc, centre - auc);
     }
-    between_runs(&sets.iter().map(|(s, ..)| s.name.as_str()).collect::<Vec<_>>(), &per_runs, &folder_of, split);
+    let names: Vec<&str> = sets.iter().map(|(s, ..)| s.name.as_str()).collect();
+    between_runs(&names, &per_runs, &folder_of, split);
+    if per_sequence {
+        by_sequence(&names, &per_runs, &seqs, &folder_of, split);
+    }
     std::fs::create_dir_all(plots).map_err(|e| format!("{}: {e}", plots.display()))?;
     let sets: Vec<SetScore> = sets.into_iter().map(|(s, _, _, _)| s).collect();
     draw_plots(&sets, plots, &format!("{} sequences", seqs.len()))
+}
+
+/// Each sequence's AUC per set, in the order the sets were given: the mean
+/// over the set's runs and, for a set of several runs, the spread between
+/// them on that sequence (highest less lowest), in brackets: the figure a
+/// seed-spread goal is stated in.
+fn by_sequence(names: &[&str], per_runs: &[Vec<Vec<f64>>], seqs: &[&str], folder_of: &[String], split: Option<&Split>) {
+    println!();
+    println!(
+        "Per sequence: AUC, the mean over a set's runs, and for a set of several runs the highest run's AUC less the lowest's in brackets:"
+    );
+    println!();
+    let split_column = split.is_some();
+    let head: Vec<String> = names.iter().map(|n| n.to_string()).collect();
+    let rule = "---|".repeat(names.len() + 1 + split_column as usize);
+    match split_column {
+        true => println!("| sequence | split | {} |", head.join(" | ")),
+        false => println!("| sequence | {} |", head.join(" | ")),
+    }
+    println!("|{rule}");
+    for (i, seq) in seqs.iter().enumerate() {
+        let cells: Vec<String> = per_runs
+            .iter()
+            .map(|runs| {
+                let v: Vec<f64> = runs.iter().filter_map(|r| r.get(i).copied()).collect();
+                let m = mean(&v).unwrap_or(0.0);
+                let (lo, hi) = v.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &x| (l.min(x), h.max(x)));
+                if v.len() > 1 { format!("{m:.3} ({:.3})", hi - lo) } else { format!("{m:.3}") }
+            })
+            .collect();
+        let folder = folder_of.get(i).map(String::as_str).unwrap_or("");
+        match split {
+            Some(sp) => {
+                let part = if sp.tune.iter().any(|n| n == folder) {
+                    "tune"
+                } else if sp.check.iter().any(|n| n == folder) {
+                    "check"
+                } else {
+                    "-"
+                };
+                println!("| {seq} | {part} | {} |", cells.join(" | "));
+            }
+            None => println!("| {seq} | {} |", cells.join(" | ")),
+        }
+    }
 }
 
 /// The mean of per-sequence `values` over the sequences whose folder (as
