@@ -424,7 +424,6 @@ impl Config {
                 velocity_decay: 0.5,
                 speed_noise: 1.0,
                 scale_noise: 0.01,
-                scale_rate_noise: 0.0,
             },
             alpha: 0.1,
             model_update: ModelUpdate::Confident,
@@ -602,7 +601,6 @@ impl Config {
         check("dynamics.velocity_decay", d.velocity_decay, 0.0, 1.0)?;
         check("dynamics.speed_noise", d.speed_noise, 0.0, 10.0)?;
         check("dynamics.scale_noise", d.scale_noise, 0.0, 0.5)?;
-        check("dynamics.scale_rate_noise", d.scale_rate_noise, 0.0, 0.1)?;
         crate::motion::validate(self.scene_motion)?;
         crate::correlation::validate(self.correlation)?;
         crate::correlation::validate_gradient(self.gradient)?;

@@ -6,9 +6,15 @@ use crate::geometry::Ellipse;
 use crate::scalar::{Real, clamp, max, min, normal_from_bits, sqrt, unit_from_bits};
 use rand_core::Rng;
 
-/// One hypothesis `s = {x, y, vx, vy, Hx, Hy, ȧ}`: the centre of an upright
-/// ellipse, its velocity in pixels per frame, its half axes, and the rate at
-/// which its scale changes per frame.
+/// One hypothesis `s = {x, y, vx, vy, Hx, Hy}`: the centre of an upright
+/// ellipse, its velocity in pixels per frame, and its half axes.
+///
+/// The papers' state also carries a scale rate `ȧ` (the half axes grow by
+/// `1 + ȧ` a frame, `ȧ` a random walk). It is left out: with any noise on
+/// it the box's size random-walks, since a colour histogram barely
+/// penalises a wrong size (docs/method.md), and without noise it stays 0,
+/// so that it would only take 4 bytes a particle. The size follows the
+/// target by the scale searches after the estimate instead.
 #[derive(Copy, Clone, Debug, PartialEq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Particle {
@@ -24,8 +30,6 @@ pub struct Particle {
     pub hx: Real,
     /// Half axis along y.
     pub hy: Real,
-    /// Relative scale change per frame (`0.01` grows 1% a frame).
-    pub a_dot: Real,
 }
 
 impl Particle {
@@ -68,8 +72,6 @@ pub struct Dynamics {
     pub speed_noise: Real,
     /// Standard deviation of the multiplicative noise on each half axis.
     pub scale_noise: Real,
-    /// Standard deviation of the noise on the scale rate `ȧ`.
-    pub scale_rate_noise: Real,
 }
 
 /// Where particles may be: the state constraints of the model.
@@ -89,7 +91,7 @@ impl Dynamics {
     /// The state is then kept physical: the centre stays inside the frame
     /// (a particle that hits the border loses that velocity component, so the
     /// filter waits at the border where a target that left will come back),
-    /// half axes stay within `[min_half, frame size / 2]`, and `ȧ` within ±10%.
+    /// and half axes stay within `[min_half, frame size / 2]`.
     /// `speed` is the target's recent speed in pixels a frame (see
     /// `speed_noise`).
     pub(crate) fn propagate<R: Rng>(&self, p: &mut Particle, b: &Bounds, speed: Real, rng: &mut R) {
@@ -100,9 +102,13 @@ impl Dynamics {
         p.y += p.vy + spread * n();
         p.vx = self.velocity_decay * p.vx + self.velocity_noise * s * n();
         p.vy = self.velocity_decay * p.vy + self.velocity_noise * s * n();
-        p.a_dot = clamp(p.a_dot + self.scale_rate_noise * n(), -0.1, 0.1);
-        p.hx *= 1.0 + p.a_dot + self.scale_noise * n();
-        p.hy *= 1.0 + p.a_dot + self.scale_noise * n();
+        // The papers' scale rate `ȧ` drew its noise here. The state leaves
+        // `ȧ` out (see [`Particle`]) but its draw keeps its place in the
+        // generator's sequence, so that a seed gives the tracks of the
+        // seven-component filter this one equals (its `ȧ` held 0).
+        let _ = n();
+        p.hx *= 1.0 + self.scale_noise * n();
+        p.hy *= 1.0 + self.scale_noise * n();
         keep_inside(&mut p.x, &mut p.vx, b.width);
         keep_inside(&mut p.y, &mut p.vy, b.height);
         p.hx = clamp(p.hx, b.min_half, max(0.5 * b.width, b.min_half));
@@ -254,7 +260,6 @@ pub(crate) fn mean_state(particles: &[Particle], weights: &[Real]) -> Particle {
         m.vy += w * p.vy;
         m.hx += w * p.hx;
         m.hy += w * p.hy;
-        m.a_dot += w * p.a_dot;
         (lo.x, hi.x) = (min(lo.x, p.x), max(hi.x, p.x));
         (lo.y, hi.y) = (min(lo.y, p.y), max(hi.y, p.y));
         (lo.hx, hi.hx) = (min(lo.hx, p.hx), max(hi.hx, p.hx));
@@ -320,24 +325,41 @@ mod tests {
             velocity_decay: 1.0,
             speed_noise: 0.0,
             scale_noise: 0.0,
-            scale_rate_noise: 0.0,
         }
     }
 
     #[test]
     fn noiseless_dynamics_are_constant_velocity() {
         // Reason: with zero noise, s_t = A s_{t-1}: the centre advances by the
-        // velocity each frame and the size grows by (1 + ȧ).
+        // velocity each frame and the size stays.
         let d = still();
-        let mut p = Particle { x: 100.0, y: 200.0, vx: 3.0, vy: -2.0, hx: 10.0, hy: 20.0, a_dot: 0.05 };
+        let mut p = Particle { x: 100.0, y: 200.0, vx: 3.0, vy: -2.0, hx: 10.0, hy: 20.0 };
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(1);
         for _ in 0..10 {
             d.propagate(&mut p, &bounds(), 0.0, &mut rng);
         }
         assert_eq!((p.x, p.y), (130.0, 180.0));
         assert_eq!((p.vx, p.vy), (3.0, -2.0));
-        let g = 1.05f32.powi(10);
-        assert!((p.hx - 10.0 * g).abs() < 1e-3 && (p.hy - 20.0 * g).abs() < 1e-3);
+        assert_eq!((p.hx, p.hy), (10.0, 20.0));
+    }
+
+    #[test]
+    fn a_step_draws_seven_normals_as_the_papers_state_does() {
+        // Reason: the invariant that keeps a seed's tracks those of the
+        // seven-component filter (see `propagate`): one step takes seven
+        // draws from the generator, the scale rate's included, so that the
+        // generator's next value is the eighth of its stream.
+        let d = Dynamics { position_noise: 0.1, velocity_noise: 0.05, scale_noise: 0.01, ..still() };
+        let mut rng = Xoshiro128PlusPlus::seed_from_u64(5);
+        let mut p = Particle { x: 50.0, y: 50.0, hx: 10.0, hy: 10.0, ..Default::default() };
+        d.propagate(&mut p, &bounds(), 0.0, &mut rng);
+        let mut stream = Xoshiro128PlusPlus::seed_from_u64(5);
+        let draws: Vec<u64> = (0..8).map(|_| rand_core::Rng::next_u64(&mut stream)).collect();
+        assert_eq!(rand_core::Rng::next_u64(&mut rng), draws[7]);
+        // The half axes took the sixth and seventh draws (the fifth is the
+        // scale rate's).
+        let grow = |bits: u64| 1.0 + 0.01 * normal_from_bits(bits);
+        assert_eq!((p.hx, p.hy), (10.0 * grow(draws[5]), 10.0 * grow(draws[6])));
     }
 
     /// The sample standard deviation of one step's x displacement of a
@@ -394,7 +416,7 @@ mod tests {
     #[test]
     fn centre_stays_in_frame_and_stops_at_the_border() {
         let d = still();
-        let mut p = Particle { x: 5.0, y: 5.0, vx: -10.0, vy: 0.0, hx: 4.0, hy: 4.0, a_dot: 0.0 };
+        let mut p = Particle { x: 5.0, y: 5.0, vx: -10.0, vy: 0.0, hx: 4.0, hy: 4.0 };
         let mut rng = Xoshiro128PlusPlus::seed_from_u64(1);
         d.propagate(&mut p, &bounds(), 0.0, &mut rng);
         assert_eq!((p.x, p.vx), (0.0, 0.0));

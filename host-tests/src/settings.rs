@@ -72,7 +72,6 @@ pub const KEYS: &[Key] = &[
         set(&mut c.dynamics.speed_noise, num(k, v))
     }),
     key("scale_noise", "relative, per frame", |c, k, v| set(&mut c.dynamics.scale_noise, num(k, v))),
-    key("scale_rate_noise", "per frame", |c, k, v| set(&mut c.dynamics.scale_rate_noise, num(k, v))),
     key("alpha", "model adaptation rate", |c, k, v| set(&mut c.alpha, num(k, v))),
     key("update_threshold", "π_T", |c, k, v| set(&mut c.update_threshold, num(k, v))),
     key("update_sigma", "σ of the model-update gate", |c, k, v| set(&mut c.update_sigma, num(k, v))),
