@@ -319,13 +319,7 @@ mod tests {
 
     /// Constant velocity with no noise at all.
     fn still() -> Dynamics {
-        Dynamics {
-            position_noise: 0.0,
-            velocity_noise: 0.0,
-            velocity_decay: 1.0,
-            speed_noise: 0.0,
-            scale_noise: 0.0,
-        }
+        Dynamics { position_noise: 0.0, velocity_noise: 0.0, velocity_decay: 1.0, speed_noise: 0.0, scale_noise: 0.0 }
     }
 
     #[test]

@@ -174,7 +174,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
                     } else {
                         (0.0, 0.0)
                     };
-                    Particle { x: x + s * dx, y: y + s * dy, vx, vy, hx, hy, ..Default::default() }
+                    Particle { x: x + s * dx, y: y + s * dy, vx, vy, hx, hy }
                 }
                 // Near the target, only the places: the rest of the set
                 // goes on tracking.
