@@ -10,11 +10,11 @@ use rand_core::Rng;
 /// ellipse, its velocity in pixels per frame, and its half axes.
 ///
 /// The papers' state also carries a scale rate `ȧ` (the half axes grow by
-/// `1 + ȧ` a frame, `ȧ` a random walk). It is left out: with any noise on
-/// it the box's size random-walks, since a colour histogram barely
-/// penalises a wrong size (docs/method.md), and without noise it stays 0,
-/// so that it would only take 4 bytes a particle. The size follows the
-/// target by the scale searches after the estimate instead.
+/// `1 + ȧ` a frame, `ȧ` a random walk). It is left out: any noise on it
+/// lets the box's size random-walk, since a colour histogram barely
+/// penalises a wrong size (docs/method.md), and without noise it holds 0
+/// in every particle. The size follows the target through the scale
+/// searches after the estimate instead.
 #[derive(Copy, Clone, Debug, PartialEq, Default)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Particle {
