@@ -363,7 +363,7 @@ impl CorrelationFilter {
         // real part and row b in the imaginary part. The response is stored
         // back two values to a slot (the half spectra are no longer
         // needed); running sums give the PSR.
-        let keep = FROM_CENTRE.map(|d| integer_fft::units(1.0 - centre_bias * d));
+        let keep = FROM_CENTRE.map(|d| round((1.0 - centre_bias * d) * integer_fft::ONE as Real));
         let (mut best, mut weighed, mut at) = (i32::MIN, i32::MIN, (0usize, 0usize));
         let (mut s1, mut s2) = (0i64, 0i64);
         for (pair_index, rows) in work.chunks_exact_mut(2).enumerate() {

@@ -51,13 +51,6 @@ pub(super) const fn units_f64(v: f64) -> i32 {
     if v >= 0.0 { (v * ONE as f64 + 0.5) as i32 } else { -((-v * ONE as f64 + 0.5) as i32) }
 }
 
-/// `v` (in `[−1, 1]`) in units of 2^-15, rounded (halves away from zero);
-/// 0 for NaN.
-pub(super) fn units(v: crate::scalar::Real) -> i32 {
-    let scaled = v * ONE as crate::scalar::Real;
-    if scaled >= 0.0 { (scaled + 0.5) as i32 } else { -((0.5 - scaled) as i32) }
-}
-
 /// `a · w / 2^15`, rounded to the nearest integer (halves up), exactly,
 /// for `|a| < 2^30` and `|w| ≤ 2^15`: in one 64-bit product where the core
 /// multiplies 32 by 32 bits into 64 ([`wide`]), in two 32-bit ones where
