@@ -254,14 +254,9 @@ fn by_sequence(names: &[&str], per_runs: &[Vec<Vec<f64>>], seqs: &[&str], folder
         "Per sequence: AUC, the mean over a set's runs, and for a set of several runs the highest run's AUC less the lowest's in brackets:"
     );
     println!();
-    let split_column = split.is_some();
-    let head: Vec<String> = names.iter().map(|n| n.to_string()).collect();
-    let rule = "---|".repeat(names.len() + 1 + split_column as usize);
-    match split_column {
-        true => println!("| sequence | split | {} |", head.join(" | ")),
-        false => println!("| sequence | {} |", head.join(" | ")),
-    }
-    println!("|{rule}");
+    let split_head = if split.is_some() { "split | " } else { "" };
+    println!("| sequence | {split_head}{} |", names.join(" | "));
+    println!("|{}", "---|".repeat(names.len() + 1 + split.is_some() as usize));
     for (i, seq) in seqs.iter().enumerate() {
         let cells: Vec<String> = per_runs
             .iter()
@@ -273,19 +268,8 @@ fn by_sequence(names: &[&str], per_runs: &[Vec<Vec<f64>>], seqs: &[&str], folder
             })
             .collect();
         let folder = folder_of.get(i).map(String::as_str).unwrap_or("");
-        match split {
-            Some(sp) => {
-                let part = if sp.tune.iter().any(|n| n == folder) {
-                    "tune"
-                } else if sp.check.iter().any(|n| n == folder) {
-                    "check"
-                } else {
-                    "-"
-                };
-                println!("| {seq} | {part} | {} |", cells.join(" | "));
-            }
-            None => println!("| {seq} | {} |", cells.join(" | ")),
-        }
+        let part = split.map_or(String::new(), |sp| format!("{} | ", sp.part_of(folder)));
+        println!("| {seq} | {part}{} |", cells.join(" | "));
     }
 }
 

@@ -59,6 +59,18 @@ impl Split {
             _ => Err(format!("{}: needs both a `tune:` and a `check:` line", path.display())),
         }
     }
+
+    /// Which split lists the sequence folder `name`: `tune`, `check`, or
+    /// `-` for neither.
+    pub(crate) fn part_of(&self, name: &str) -> &'static str {
+        if self.tune.iter().any(|n| n == name) {
+            "tune"
+        } else if self.check.iter().any(|n| n == name) {
+            "check"
+        } else {
+            "-"
+        }
+    }
 }
 
 /// A fraction as a percentage with one decimal, `-` for none.
