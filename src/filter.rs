@@ -102,10 +102,10 @@ impl Dynamics {
         p.y += p.vy + spread * n();
         p.vx = self.velocity_decay * p.vx + self.velocity_noise * s * n();
         p.vy = self.velocity_decay * p.vy + self.velocity_noise * s * n();
-        // The papers' scale rate `ȧ` drew its noise here. The state leaves
-        // `ȧ` out (see [`Particle`]) but its draw keeps its place in the
-        // generator's sequence, so that a seed gives the tracks of the
-        // seven-component filter this one equals (its `ȧ` held 0).
+        // The papers' scale rate `ȧ` takes its noise's draw here. The state
+        // leaves `ȧ` out (see [`Particle`]) but its draw keeps its place in
+        // the generator's sequence, so that a seed gives the tracks of the
+        // seven-component filter this one equals (its `ȧ` held at 0).
         let _ = n();
         p.hx *= 1.0 + self.scale_noise * n();
         p.hy *= 1.0 + self.scale_noise * n();
