@@ -110,12 +110,12 @@
 
 #if defined(__LP64__)
 // 64-bit words of a [`pftrack_tracker`] on a 64-bit target.
-#define PFTRACK_TRACKER_WORDS 4788
+#define PFTRACK_TRACKER_WORDS 4789
 #endif
 
 #if !defined(__LP64__)
 // 64-bit words of a [`pftrack_tracker`] on a 32-bit target.
-#define PFTRACK_TRACKER_WORDS 4780
+#define PFTRACK_TRACKER_WORDS 4781
 #endif
 
 // Bytes of a [`pftrack_tracker`].

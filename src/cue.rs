@@ -68,11 +68,24 @@ pub(crate) trait Cue {
         false
     }
 
-    /// Adapts to this frame's estimate `e`, whose confidence is `confidence`
-    /// (`work` as for [`Cue::start`]).
+    /// Adapts to this frame's estimate `e` and what the tracker concluded
+    /// of it (`work` as for [`Cue::start`]).
     #[allow(unused_variables)]
-    fn adapt(&mut self, settings: &Self::Settings, frame: &Frame<'_>, e: &Ellipse, confidence: Real, work: &mut [u16]) {
+    fn adapt(&mut self, settings: &Self::Settings, frame: &Frame<'_>, e: &Ellipse, verdict: Verdict, work: &mut [u16]) {
     }
+}
+
+/// What the tracker concluded of a frame's estimate, as the cues adapt to
+/// it.
+#[derive(Copy, Clone, Debug, PartialEq)]
+pub(crate) struct Verdict {
+    /// The confidence of its signals ([`crate::on_target`]), as the cues
+    /// learn from it: not halved where the surroundings-motion test flags
+    /// the estimate, as the reported confidence is.
+    pub(crate) confidence: Real,
+    /// Whether the surroundings-motion test flagged the estimate: it moves
+    /// with the scene around it, as background does.
+    pub(crate) moves_with_scene: bool,
 }
 
 /// What [`Cue::place`] may change of the estimate.

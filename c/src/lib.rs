@@ -107,10 +107,10 @@ pub const PFTRACK_EVENT_REACQUIRED: u32 = 4;
 
 /// 64-bit words of a [`pftrack_tracker`] on a 64-bit target.
 #[cfg(target_pointer_width = "64")]
-pub const PFTRACK_TRACKER_WORDS: usize = 4788;
+pub const PFTRACK_TRACKER_WORDS: usize = 4789;
 /// 64-bit words of a [`pftrack_tracker`] on a 32-bit target.
 #[cfg(not(target_pointer_width = "64"))]
-pub const PFTRACK_TRACKER_WORDS: usize = 4780;
+pub const PFTRACK_TRACKER_WORDS: usize = 4781;
 /// Bytes of a [`pftrack_tracker`].
 pub const PFTRACK_TRACKER_BYTES: usize = PFTRACK_TRACKER_WORDS * 8;
 /// Alignment of a [`pftrack_tracker`], in bytes.

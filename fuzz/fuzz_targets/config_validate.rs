@@ -4,7 +4,7 @@
 use libfuzzer_sys::fuzz_target;
 use pftrack::{BoundingBox, Config, Frame, GradientCue, LostSearch, PixelFormat, Sigma, SizeSearch, Tracker};
 
-fuzz_target!(|v: [f32; 21]| {
+fuzz_target!(|v: [f32; 22]| {
     let mut c = Config::default();
     c.likelihood.sigma = if v[0] >= 0.0 { Sigma::Fixed(v[1]) } else { Sigma::Adaptive { min: v[1], max: v[2] } };
     c.likelihood.eps = v[3];
@@ -23,7 +23,7 @@ fuzz_target!(|v: [f32; 21]| {
     // Lost after one miss, so that the steps below reach the lost search.
     c.lost_search = LostSearch::Widening { growth: v[16] };
     c.size = c.size.map(|s| SizeSearch { template: v[17], ..s });
-    c.gradient = c.gradient.map(|g| GradientCue { pyramid_pull: v[18], pyramid_learn_above: v[19], grey_pull: v[20], ..g });
+    c.gradient = c.gradient.map(|g| GradientCue { pyramid_pull: v[18], pyramid_learn_above: v[19], grey_pull: v[20], narrow_above: v[21], ..g });
     c.lost_after = 1;
     if c.validate().is_err() {
         assert!(Tracker::<8>::new(c, 1).is_err(), "the constructor validates too");

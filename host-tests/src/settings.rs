@@ -126,7 +126,7 @@ pub const KEYS: &[Key] = &[
     ),
     key(
         "gradient",
-        "off | on | RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND:RELEARN_BELOW:RELEARN_ABOVE[:PYRAMID_PULL:PYRAMID_LEARN_ABOVE[:GREY_PULL]] (correlation filter on gradient channels over a wide window, and its scale pyramid, off when left out; GREY_PULL, the pull on grey-level video, PULL when left out; on = 0.2:0.7:4:0.7:0.03:0.3:3:0:4:0.8:0.2:0.9:0.85)",
+        "off | on | RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND:RELEARN_BELOW:RELEARN_ABOVE[:PYRAMID_PULL:PYRAMID_LEARN_ABOVE[:GREY_PULL[:NARROW_ABOVE]]] (correlation filter on gradient channels over a wide window, and its scale pyramid, off when left out; GREY_PULL, the pull on grey-level video, PULL when left out; on = 0.2:0.7:4:0.7:0.03:0.3:3:0:4:0.8:0.2:0.9:0.85)",
         gradient,
     ),
     key(
@@ -377,15 +377,17 @@ fn gradient(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
         ["on"] => Some(pftrack::GradientCue::MEASURED),
         [rate, above, every, pull, step, scale_pull, psr, blend, relearn_below, relearn_above, pyramid @ ..] => {
             // The pyramid's fields, off when left out; the pull on grey
-            // video, the pull's when left out.
+            // video, the pull's when left out; the narrower window after a
+            // sure frame, never when left out.
             let pull = num(key, pull)?;
-            let (pyramid_pull, pyramid_learn_above, grey_pull) = match pyramid {
-                [] => (0.0, 0.0, pull),
-                [p, a] => (num(key, p)?, num(key, a)?, pull),
-                [p, a, g] => (num(key, p)?, num(key, a)?, num(key, g)?),
+            let (pyramid_pull, pyramid_learn_above, grey_pull, narrow_above) = match pyramid {
+                [] => (0.0, 0.0, pull, 1.0),
+                [p, a] => (num(key, p)?, num(key, a)?, pull, 1.0),
+                [p, a, g] => (num(key, p)?, num(key, a)?, num(key, g)?, 1.0),
+                [p, a, g, n] => (num(key, p)?, num(key, a)?, num(key, g)?, num(key, n)?),
                 _ => {
                     return Err(format!(
-                        "{key}: `{v}`: a scale pyramid needs PYRAMID_PULL:PYRAMID_LEARN_ABOVE[:GREY_PULL]"
+                        "{key}: `{v}`: a scale pyramid needs PYRAMID_PULL:PYRAMID_LEARN_ABOVE[:GREY_PULL[:NARROW_ABOVE]]"
                     ));
                 }
             };
@@ -405,11 +407,12 @@ fn gradient(c: &mut Config, key: &str, v: &str) -> Result<(), String> {
                 relearn_above: num(key, relearn_above)?,
                 pyramid_pull,
                 pyramid_learn_above,
+                narrow_above,
             })
         }
         _ => {
             return Err(format!(
-                "{key}: `{v}`: expected off, on or RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND:RELEARN_BELOW:RELEARN_ABOVE[:PYRAMID_PULL:PYRAMID_LEARN_ABOVE[:GREY_PULL]]"
+                "{key}: `{v}`: expected off, on or RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND:RELEARN_BELOW:RELEARN_ABOVE[:PYRAMID_PULL:PYRAMID_LEARN_ABOVE[:GREY_PULL[:NARROW_ABOVE]]]"
             ));
         }
     };
@@ -514,21 +517,24 @@ mod tests {
     #[test]
     fn the_gradient_filter_reads_its_fields_in_order() {
         // Reason: the help text's forms, field by field: `on` is the
-        // thirteen fields it lists; twelve leave the pull on grey video at
-        // the pull, ten leave the pyramid off too.
+        // fourteen fields it lists; thirteen never narrow the window,
+        // twelve leave the pull on grey video at the pull too, ten leave
+        // the pyramid off as well.
         let gradient = |v: &str| {
             let mut c = Config::default();
             apply(&mut c, &format!("gradient={v}")).map(|()| c.gradient)
         };
         let on = gradient("on").unwrap();
-        assert_eq!(on, gradient("0.2:0.7:4:0.7:0.03:0.3:3:0:4:0.8:0.2:0.9:0.85").unwrap());
-        assert_eq!(on.map(|g| (g.pull, g.grey_pull)), Some((0.7, 0.85)));
+        assert_eq!(on, gradient("0.2:0.7:4:0.7:0.03:0.3:3:0:4:0.8:0.2:0.9:0.85:0.95").unwrap());
+        assert_eq!(on.map(|g| (g.pull, g.grey_pull, g.narrow_above)), Some((0.7, 0.85, 0.95)));
+        let g = gradient("0.2:0.7:4:0.7:0.03:0.3:3:0:4:0.8:0.2:0.9:0.85").unwrap().unwrap();
+        assert_eq!((g.grey_pull, g.narrow_above), (0.85, 1.0));
         let g = gradient("0.2:0.7:4:0.6:0.03:0.3:3:0:4:0.8:0.2:0.9").unwrap().unwrap();
         assert_eq!((g.pull, g.grey_pull, g.pyramid_pull, g.pyramid_learn_above), (0.6, 0.6, 0.2, 0.9));
         let g = gradient("0.2:0.7:4:0.6:0.03:0.3:3:0:4:0.8").unwrap().unwrap();
-        assert_eq!((g.grey_pull, g.pyramid_pull, g.pyramid_learn_above), (0.6, 0.0, 0.0));
+        assert_eq!((g.grey_pull, g.pyramid_pull, g.pyramid_learn_above, g.narrow_above), (0.6, 0.0, 0.0, 1.0));
         assert!(gradient("0.2:0.7:4:0.6:0.03:0.3:3:0:4:0.8:0.2").is_err());
-        assert!(gradient("0.2:0.7:4:0.6:0.03:0.3:3:0:4:0.8:0.2:0.9:0.85:1").is_err());
+        assert!(gradient("0.2:0.7:4:0.6:0.03:0.3:3:0:4:0.8:0.2:0.9:0.85:0.9:1").is_err());
     }
 
     #[test]

@@ -39,7 +39,7 @@
 use super::CorrelationCue;
 use super::integer_fft::{self, Int};
 use super::series::{exp, ln_1p, sin};
-use crate::cue::{Cue, Freedom};
+use crate::cue::{Cue, Freedom, Verdict};
 use crate::filter::{Particle, scale_estimate, shift_estimate};
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
@@ -772,8 +772,8 @@ impl Cue for CorrelationFilter {
 
     /// Learns on every confident frame, at its own slow rate: as a running
     /// mean over many frames it does not drift with one.
-    fn adapt(&mut self, c: &CorrelationCue, frame: &Frame<'_>, e: &Ellipse, confidence: Real, work: &mut [u16]) {
-        if confidence > c.learn_above {
+    fn adapt(&mut self, c: &CorrelationCue, frame: &Frame<'_>, e: &Ellipse, verdict: Verdict, work: &mut [u16]) {
+        if verdict.confidence > c.learn_above {
             self.learn(frame, e, (c.padding, c.rate), work);
         }
     }

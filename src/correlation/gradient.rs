@@ -47,7 +47,7 @@ use super::filter::{peak, round, sub_cell, taper};
 #[cfg(feature = "scale-pyramid")]
 use super::pyramid::ScalePyramid;
 use super::series::sin;
-use crate::cue::{Cue, Freedom};
+use crate::cue::{Cue, Freedom, Verdict};
 use crate::filter::{Particle, scale_estimate, shift_estimate};
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
@@ -103,18 +103,33 @@ const TAPER: [Real; LEARN] = taper();
 /// centre counts for less: the target moves little between frames, and a
 /// look-alike at the window's edge is more likely than the target there
 /// (the cosine window Siamese trackers put on their responses).
-const SHIFT_WEIGHT: [Real; READ] = shift_weight();
+const SHIFT_WEIGHT: [Real; READ] = shift_weight(1);
 
+/// The weight of a shift after a sure frame ([`GradientCue::narrow_above`]):
+/// [`SHIFT_WEIGHT`] squared, a window about half as wide. While the
+/// estimate is sure, the target is where it was, give or take its motion,
+/// and a look-alike a box away is not it; after a frame that is not (or one
+/// that moves with the scene around it, as background does), the target
+/// may be wherever it went meanwhile, and the wide window lets the filter
+/// find it there.
+const SURE_SHIFT_WEIGHT: [Real; READ] = shift_weight(2);
+
+/// The Hann taper of [`SHIFT_WEIGHT`] to the power `power`.
 // Evaluated at compile time only (for a `const`): an index out of range
 // would stop the build, never the device.
 #[allow(clippy::indexing_slicing)]
-const fn shift_weight() -> [Real; READ] {
+const fn shift_weight(power: u32) -> [Real; READ] {
     let mut out = [0.0; READ];
     let mut i = 0;
     while i < READ {
         let cell = (LEARN + i) as f64 - (READ / 2) as f64;
         let s = sin(core::f64::consts::PI * (cell + 0.5) / (2 * LEARN) as f64);
-        out[i] = (s * s) as Real;
+        let (mut w, mut k) = (1.0, 0);
+        while k < power {
+            w *= s * s;
+            k += 1;
+        }
+        out[i] = w as Real;
         i += 1;
     }
     out
@@ -214,6 +229,9 @@ pub(crate) struct GradientFilter {
     /// Whether the window first learnt was all grey levels
     /// ([`GradientCue::grey_pull`]).
     grey: bool,
+    /// Whether the last frame was sure ([`GradientCue::narrow_above`]): the
+    /// response is then weighted by [`SURE_SHIFT_WEIGHT`].
+    sure: bool,
     /// Where `cells` holds this frame's read window: its centre and cell
     /// size (cleared once the frame is adapted to).
     window: Option<((Real, Real), (Real, Real))>,
@@ -314,11 +332,18 @@ impl GradientFilter {
             waiting: 0,
             unlike: false,
             grey: false,
+            sure: true,
             window: None,
             cells: [0; CHANNELS * READ * READ],
             #[cfg(feature = "scale-pyramid")]
             pyramid: ScalePyramid::new(),
         }
+    }
+
+    /// The weights of the read window's shifts this frame: narrower after
+    /// a sure frame.
+    fn shift_weights(&self) -> &'static [Real; READ] {
+        if self.sure { &SURE_SHIFT_WEIGHT } else { &SHIFT_WEIGHT }
     }
 
     /// How the filter reads a window's cells normalised by `norm`.
@@ -357,7 +382,8 @@ impl GradientFilter {
     /// its centre.
     fn at_shift(&self, reading: &Reading, sr: i32, sc: i32) -> Option<Real> {
         let origin = (READ / 2 - HALF) as i32;
-        let weight = |s: i32| SHIFT_WEIGHT.get((s + (READ / 2) as i32) as usize).copied().unwrap_or(0.0);
+        let table = self.shift_weights();
+        let weight = |s: i32| table.get((s + (READ / 2) as i32) as usize).copied().unwrap_or(0.0);
         Some(self.response(&self.cells, READ, reading, origin + sr, origin + sc)? * weight(sr) * weight(sc))
     }
 
@@ -400,7 +426,8 @@ impl GradientFilter {
             }
         }
         let span = ORIGIN as i32;
-        let weight = |t: i32| SHIFT_WEIGHT.get((2 * t + (READ / 2) as i32) as usize).copied().unwrap_or(0.0);
+        let table = self.shift_weights();
+        let weight = |t: i32| table.get((2 * t + (READ / 2) as i32) as usize).copied().unwrap_or(0.0);
         let (mut best, mut at) = (Real::MIN, (0, 0));
         let (mut s1, mut s2, mut count) = (0.0 as Real, 0.0 as Real, 0u32);
         for tr in -span..=span {
@@ -910,6 +937,8 @@ impl Cue for GradientFilter {
         self.learned = false;
         self.waiting = 0;
         self.window = None;
+        // The box given is the target: as sure as a frame can be.
+        self.sure = settings.is_some_and(|c| 1.0 > c.narrow_above);
         if let Some(_c) = settings {
             self.grey = grey_levels(frame, e);
             self.learn(frame, e, 1.0, work);
@@ -993,7 +1022,9 @@ impl Cue for GradientFilter {
     /// as a running mean over many frames it does not drift with one. A
     /// sure frame whose layout no longer matches is learnt at once
     /// ([`GradientCue::relearn_below`]).
-    fn adapt(&mut self, c: &GradientCue, frame: &Frame<'_>, e: &Ellipse, confidence: Real, work: &mut [u16]) {
+    fn adapt(&mut self, c: &GradientCue, frame: &Frame<'_>, e: &Ellipse, verdict: Verdict, work: &mut [u16]) {
+        let confidence = verdict.confidence;
+        self.sure = confidence > c.narrow_above && !verdict.moves_with_scene;
         if confidence > c.learn_above {
             self.waiting = self.waiting.saturating_add(1);
             let turned = self.unlike && confidence > c.relearn_above;
@@ -1062,6 +1093,82 @@ mod tests {
                 })
                 .sum();
             assert!((p as f64 - e).abs() < 1e-6, "peak spectrum {u}: {p} against {e}");
+        }
+    }
+
+    #[test]
+    fn the_sure_window_is_the_window_squared() {
+        // Reason: the definition, against std's sin: the Hann taper of a
+        // window 2 · LEARN cells wide at a shift of s cells, squared. By
+        // hand, 14 cells off the centre: sin²(π · 46.5 / 64) = 0.5734, and
+        // squared 0.3287.
+        for (i, (&w, &n)) in SHIFT_WEIGHT.iter().zip(SURE_SHIFT_WEIGHT.iter()).enumerate() {
+            let s =
+                (std::f64::consts::PI * (LEARN as f64 + i as f64 - (READ / 2) as f64 + 0.5) / (2 * LEARN) as f64).sin();
+            assert!((w as f64 - s * s).abs() < 1e-6 && (n as f64 - s.powi(4)).abs() < 1e-6, "shift {i}");
+        }
+        let at = |t: &[Real; READ], s: usize| t[READ / 2 + s];
+        assert!((at(&SHIFT_WEIGHT, 14) - 0.5734).abs() < 1e-4 && (at(&SURE_SHIFT_WEIGHT, 14) - 0.3287).abs() < 1e-4);
+    }
+
+    #[test]
+    fn the_window_narrows_after_a_sure_frame_that_does_not_move_with_the_scene() {
+        // Reason: the rule of `GradientCue::narrow_above`, case by case: the
+        // box given is sure unless the window never narrows (1); then each
+        // frame decides the next one's window.
+        let px = blocks(0, 0);
+        let c = GradientCue::MEASURED;
+        let mut f = GradientFilter::new();
+        f.start(Some(&c), &frame(&px), &target(), lent().lend());
+        assert!(f.sure);
+        let never = GradientCue { narrow_above: 1.0, ..c };
+        f.start(Some(&never), &frame(&px), &target(), lent().lend());
+        assert!(!f.sure);
+        f.start(Some(&c), &frame(&px), &target(), lent().lend());
+        for (confidence, moves_with_scene, sure) in
+            [(0.95, false, true), (0.95, true, false), (0.85, false, false), (0.95, false, true)]
+        {
+            f.adapt(&c, &frame(&px), &target(), Verdict { confidence, moves_with_scene }, lent().lend());
+            assert_eq!(f.sure, sure, "confidence {confidence}, moves with the scene {moves_with_scene}");
+            assert!(core::ptr::eq(f.shift_weights(), if sure { &SURE_SHIFT_WEIGHT } else { &SHIFT_WEIGHT }));
+        }
+    }
+
+    #[test]
+    fn after_a_sure_frame_a_stronger_look_alike_a_box_away_does_not_take_the_peak() {
+        // Reason: the windows' weights by hand. The filter learns a
+        // textured box on a flat background; the next frame shows the box
+        // faint (contrast 0.55) where it was and at full contrast 35 px
+        // (14 cells of 2.5 px) to the right. Each copy's response is its
+        // own, times its shift's weight (the two axes' tapers multiplied):
+        // 0.9988 at the centre and 0.5730 14 cells to the right with the
+        // wide window, 0.9976 and 0.3283 with the sure one. The faint copy
+        // answers less than the full one, and the weights decide between
+        // them: read with the wide window the peak goes to the far copy
+        // (it does up to a contrast of 0.66), with the sure one it stays
+        // (from a contrast of 0.44; the responses grow with contrast less
+        // than in proportion, grey being read as log-luma).
+        let texture = blocks(0, 0);
+        let paste = |near: Real, far: bool| {
+            let mut px = vec![128u8; W * H];
+            for y in 104..136 {
+                for x in 144..176 {
+                    let v = texture[y * W + x] as Real - 128.0;
+                    px[y * W + x] = (128.0 + near * v) as u8;
+                    if far {
+                        px[y * W + x + 35] = texture[y * W + x];
+                    }
+                }
+            }
+            px
+        };
+        let mut f = GradientFilter::new();
+        f.learn(&frame(&paste(1.0, false)), &target(), 1.0, lent().lend());
+        let two = paste(0.55, true);
+        for (sure, x) in [(false, 35.0), (true, 0.0)] {
+            f.sure = sure;
+            let seen = f.look(&frame(&two), (160.0, 120.0), (16.0, 16.0), lent().lend()).unwrap();
+            assert!((seen.at.0 - x).abs() < 2.5 && seen.at.1.abs() < 2.5, "sure {sure}: peak at {:?}", seen.at);
         }
     }
 
@@ -1184,7 +1291,7 @@ mod tests {
             let psr = f.place(&c, &frame(px), (&mut e, &mut ps), Freedom::Position, lent().lend()).unwrap();
             assert_eq!(psr < c.relearn_below, learns || confidence < c.relearn_above, "PSR {psr}");
             let before = f.weights;
-            f.adapt(&c, &frame(px), &e, confidence, lent().lend());
+            f.adapt(&c, &frame(px), &e, Verdict { confidence, moves_with_scene: false }, lent().lend());
             assert_eq!(f.weights != before, learns, "confidence {confidence}, PSR {psr}");
             assert_eq!(f.waiting, if learns { 0 } else { 1 });
         }

@@ -2,7 +2,7 @@
 //! by its module (see [`crate::cue`]) and one line in [`cues!`]'s list.
 
 use crate::config::Config;
-use crate::cue::{Cue, Freedom};
+use crate::cue::{Cue, Freedom, Verdict};
 use crate::filter::Particle;
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
@@ -74,9 +74,9 @@ macro_rules! cues {
             }
 
             /// [`Cue::adapt`] of every cue that is on.
-            pub(super) fn adapt(&mut self, cfg: &Config, frame: &Frame<'_>, e: &Ellipse, confidence: Real, work: &mut [u16]) {
+            pub(super) fn adapt(&mut self, cfg: &Config, frame: &Frame<'_>, e: &Ellipse, verdict: Verdict, work: &mut [u16]) {
                 $(if let Some(s) = ($settings)(cfg) {
-                    Cue::adapt(&mut self.$name, &s, frame, e, confidence, work);
+                    Cue::adapt(&mut self.$name, &s, frame, e, verdict, work);
                 })*
             }
         }

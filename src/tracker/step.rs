@@ -6,7 +6,7 @@ use super::search::*;
 use super::{ScalePrior, Track, Tracker};
 use crate::apart::{Alone, Apart};
 use crate::config::{Life, LostSearch, ModelUpdate, Redetect};
-use crate::cue::Freedom;
+use crate::cue::{Freedom, Verdict};
 use crate::error::Error;
 use crate::estimate::{Diagnostics, Estimate, Event, TrackState};
 use crate::filter::{Bounds, Particle, mean_state, normal, resample, scale_estimate, shift_estimate};
@@ -77,7 +77,7 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         let event = self.life_cycle(look.found && !stuck && !taken);
         self.settled |= self.state == TrackState::Tracking && self.misses == 0;
         self.follow(&look.ellipse, was_tracking);
-        let model_updated = self.adapt(scratch, frame, &look, event);
+        let model_updated = self.adapt(scratch, frame, &look, event, stuck);
         Ok(Estimate {
             ellipse: look.ellipse,
             confidence: if stuck { look.confidence * MOVES_WITH_SCENE } else { look.confidence },
@@ -431,19 +431,22 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
     }
 
     /// Adapts the models on steady, trustworthy tracking frames; returns
-    /// whether they were updated.
+    /// whether they were updated. `stuck` where the surroundings-motion
+    /// test flagged the estimate.
     pub(super) fn adapt<const E: usize>(
         &mut self,
         scratch: &mut Scratch<K, E>,
         frame: &Frame<'_>,
         look: &Look,
         event: Option<Event>,
+        stuck: bool,
     ) -> bool {
         let Track { config: cfg, target, state, misses, cues, .. } = self;
         let Some(target) = target.as_mut() else { return false };
         // The foreground map is dead once the step has estimated: the cues
         // learn in its memory.
-        cues.adapt(cfg, frame, &look.ellipse, look.confidence, scratch.fgmap.lend());
+        let verdict = Verdict { confidence: look.confidence, moves_with_scene: stuck };
+        cues.adapt(cfg, frame, &look.ellipse, verdict, scratch.fgmap.lend());
         let steady = *state == TrackState::Tracking && event.is_none() && *misses == 0 && cfg.alpha > 0.0;
         let d2_max = target.models.d2_max(cfg);
         let wanted = match cfg.model_update {

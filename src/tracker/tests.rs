@@ -601,6 +601,8 @@ fn the_gradient_filter_needs_its_feature_and_sane_settings() {
         (GradientCue { pyramid_pull: 1.5, ..m }, "gradient.pyramid_pull", ParamProblem::OutOfRange),
         (GradientCue { pyramid_pull: Real::NAN, ..m }, "gradient.pyramid_pull", ParamProblem::NonFinite),
         (GradientCue { pyramid_learn_above: -0.5, ..m }, "gradient.pyramid_learn_above", ParamProblem::OutOfRange),
+        (GradientCue { narrow_above: 1.5, ..m }, "gradient.narrow_above", ParamProblem::OutOfRange),
+        (GradientCue { narrow_above: Real::NAN, ..m }, "gradient.narrow_above", ParamProblem::NonFinite),
     ] {
         let err = Tracker::<10>::new(Config { gradient: Some(cue), ..Config::default() }, 1).unwrap_err();
         assert_eq!(err, Error::Config(ConfigError { field, problem }));
