@@ -1126,11 +1126,11 @@ mod tests {
         assert!(!f.sure);
         f.start(Some(&c), &frame(&px), &target(), lent().lend());
         for (confidence, moves_with_scene, sure) in
-            [(0.95, false, true), (0.95, true, false), (0.85, false, false), (0.95, false, true)]
+            [(0.97, false, true), (0.97, true, false), (0.9, false, false), (0.97, false, true)]
         {
             f.adapt(&c, &frame(&px), &target(), Verdict { confidence, moves_with_scene }, lent().lend());
             assert_eq!(f.sure, sure, "confidence {confidence}, moves with the scene {moves_with_scene}");
-            assert!(core::ptr::eq(f.shift_weights(), if sure { &SURE_SHIFT_WEIGHT } else { &SHIFT_WEIGHT }));
+            assert_eq!(f.shift_weights(), if sure { &SURE_SHIFT_WEIGHT } else { &SHIFT_WEIGHT });
         }
     }
 
