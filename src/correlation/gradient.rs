@@ -106,7 +106,8 @@ const TAPER: [Real; LEARN] = taper();
 const SHIFT_WEIGHT: [Real; READ] = shift_weight(1);
 
 /// The weight of a shift after a sure frame ([`GradientCue::narrow_above`]):
-/// [`SHIFT_WEIGHT`] squared, a window about half as wide. While the
+/// [`SHIFT_WEIGHT`] squared, a window about 0.7 as wide (at half its height
+/// about 11 cells from the centre rather than 15.5). While the
 /// estimate is sure, the target is where it was, give or take its motion,
 /// and a look-alike a box away is not it; after a frame that is not (or one
 /// that moves with the scene around it, as background does), the target
@@ -332,7 +333,7 @@ impl GradientFilter {
             waiting: 0,
             unlike: false,
             grey: false,
-            sure: true,
+            sure: false,
             window: None,
             cells: [0; CHANNELS * READ * READ],
             #[cfg(feature = "scale-pyramid")]
