@@ -77,7 +77,10 @@ pub(crate) trait Cue {
 
 /// What the tracker concluded of a frame's estimate, as the cues adapt to
 /// it.
-#[derive(Copy, Clone, Debug, PartialEq)]
+#[derive(Copy, Clone, Debug)]
+// Read whole only by the gradient filter (the grey-level one reads the
+// confidence).
+#[cfg_attr(not(feature = "gradient"), allow(dead_code))]
 pub(crate) struct Verdict {
     /// The confidence of its signals ([`crate::on_target`]), as the cues
     /// learn from it: not halved where the surroundings-motion test flags

@@ -115,6 +115,13 @@ const SHIFT_WEIGHT: [Real; READ] = shift_weight(1);
 /// find it there.
 const SURE_SHIFT_WEIGHT: [Real; READ] = shift_weight(2);
 
+/// Whether a frame of `verdict` is sure enough for the next frame's
+/// response to be read through [`SURE_SHIFT_WEIGHT`]
+/// ([`GradientCue::narrow_above`]).
+fn sure(c: &GradientCue, verdict: Verdict) -> bool {
+    verdict.confidence > c.narrow_above && !verdict.moves_with_scene
+}
+
 /// The Hann taper of [`SHIFT_WEIGHT`] to the power `power`.
 // Evaluated at compile time only (for a `const`): an index out of range
 // would stop the build, never the device.
@@ -939,7 +946,8 @@ impl Cue for GradientFilter {
         self.waiting = 0;
         self.window = None;
         // The box given is the target: as sure as a frame can be.
-        self.sure = settings.is_some_and(|c| 1.0 > c.narrow_above);
+        let given = Verdict { confidence: 1.0, moves_with_scene: false };
+        self.sure = settings.is_some_and(|c| sure(c, given));
         if let Some(_c) = settings {
             self.grey = grey_levels(frame, e);
             self.learn(frame, e, 1.0, work);
@@ -1025,7 +1033,7 @@ impl Cue for GradientFilter {
     /// ([`GradientCue::relearn_below`]).
     fn adapt(&mut self, c: &GradientCue, frame: &Frame<'_>, e: &Ellipse, verdict: Verdict, work: &mut [u16]) {
         let confidence = verdict.confidence;
-        self.sure = confidence > c.narrow_above && !verdict.moves_with_scene;
+        self.sure = sure(c, verdict);
         if confidence > c.learn_above {
             self.waiting = self.waiting.saturating_add(1);
             let turned = self.unlike && confidence > c.relearn_above;
