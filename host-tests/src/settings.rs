@@ -126,7 +126,7 @@ pub const KEYS: &[Key] = &[
     ),
     key(
         "gradient",
-        "off | on | RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND:RELEARN_BELOW:RELEARN_ABOVE[:PYRAMID_PULL:PYRAMID_LEARN_ABOVE[:GREY_PULL[:NARROW_ABOVE]]] (correlation filter on gradient channels over a wide window, and its scale pyramid, off when left out; GREY_PULL, the pull on grey-level video, PULL when left out; on = 0.2:0.7:4:0.7:0.03:0.3:3:0:4:0.8:0.2:0.9:0.85)",
+        "off | on | RATE:LEARN_ABOVE:LEARN_EVERY:PULL:SCALE_STEP:SCALE_PULL:MIN_PSR:BLEND:RELEARN_BELOW:RELEARN_ABOVE[:PYRAMID_PULL:PYRAMID_LEARN_ABOVE[:GREY_PULL[:NARROW_ABOVE]]] (correlation filter on gradient channels over a wide window, and its scale pyramid, off when left out; GREY_PULL, the pull on grey-level video, PULL when left out; NARROW_ABOVE, the confidence after which the window narrows, 1 (never) when left out; on = 0.2:0.7:4:0.7:0.03:0.3:3:0:4:0.8:0.2:0.9:0.85:0.95)",
         gradient,
     ),
     key(
@@ -512,6 +512,24 @@ mod tests {
         assert!(apply(&mut Config::default(), "nope=1").is_err());
         assert!(apply(&mut Config::default(), "sigma").is_err());
         assert!(apply(&mut Config::default(), "sigma=abc").is_err());
+    }
+
+    #[test]
+    fn every_on_the_help_spells_out_is_on() {
+        // Reason: a help text that lists what `on` stands for must list
+        // what `on` sets; the two are written apart, so this holds them
+        // together for every key whose help spells `on` out.
+        let mut spelt = 0;
+        for k in KEYS {
+            let Some((_, rest)) = k.help.split_once("on = ") else { continue };
+            let fields = rest.split(|c: char| c == ')' || c == ' ' || c == ';').next().unwrap();
+            let (mut on, mut listed) = (Config::default(), Config::default());
+            apply(&mut on, &format!("{}=on", k.name)).unwrap();
+            apply(&mut listed, &format!("{}={fields}", k.name)).unwrap();
+            assert_eq!(on, listed, "{}: `on` is not {fields}", k.name);
+            spelt += 1;
+        }
+        assert_eq!(spelt, 2, "correlation and gradient spell `on` out");
     }
 
     #[test]
