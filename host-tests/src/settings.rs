@@ -522,7 +522,7 @@ mod tests {
         let mut spelt = 0;
         for k in KEYS {
             let Some((_, rest)) = k.help.split_once("on = ") else { continue };
-            let fields = rest.split(|c: char| c == ')' || c == ' ' || c == ';').next().unwrap();
+            let fields = rest.split([')', ' ', ';']).next().unwrap();
             let (mut on, mut listed) = (Config::default(), Config::default());
             apply(&mut on, &format!("{}=on", k.name)).unwrap();
             apply(&mut listed, &format!("{}={fields}", k.name)).unwrap();
