@@ -135,8 +135,8 @@ pub(crate) fn command(
         let mut ms = Vec::new();
         // Each run's AUC per sequence.
         let mut per_run = Vec::new();
-        // Means over sequences of the breakdown's two AUCs.
-        let mut breakdowns = (0.0, 0.0);
+        // Means over sequences of the breakdown's three AUCs.
+        let mut breakdowns = (0.0, 0.0, 0.0);
         // Per folder (a run, e.g. a seed): its frames pooled over sequences,
         // as `track otb` pools them, and whether every track has confidences.
         let mut aware = Vec::new();
@@ -165,7 +165,9 @@ pub(crate) fn command(
                 run_seq.push(score(&boxes, t).map_or(0.0, |s| s.auc));
                 if let Some(b) = breakdown(&boxes, t) {
                     let n = (folders.len() * truths.len()) as f64;
-                    (breakdowns.0, breakdowns.1) = (breakdowns.0 + b.true_size / n, breakdowns.1 + b.true_centre / n);
+                    breakdowns.0 += b.true_size / n;
+                    breakdowns.1 += b.true_centre / n;
+                    breakdowns.2 += b.held_centre / n;
                 }
                 runs.push((boxes, t.clone()));
             }
@@ -201,7 +203,7 @@ pub(crate) fn command(
             println!("|---|---|---|---|---|---|");
         }
     }
-    type Row = (SetScore, Vec<f64>, (f64, f64), (Option<f64>, Option<f64>));
+    type Row = (SetScore, Vec<f64>, (f64, f64, f64), (Option<f64>, Option<f64>));
     let mut order: Vec<&Row> = sets.iter().collect();
     order.sort_by(|a, b| b.0.auc.total_cmp(&a.0.auc));
     for (r, per_seq, _, (missing, roc)) in order.iter().copied() {
@@ -225,14 +227,20 @@ pub(crate) fn command(
     );
     println!();
     println!(
-        "Where the overlap is lost (mean AUC over sequences, each box given the truth's size about its own centre, or moved to the truth's centre at its own size):"
+        "Where the overlap is lost (mean AUC over sequences, each box given the truth's size about its own centre, or moved to the truth's centre at its own size; the last column moves only the boxes that still overlap the truth by at least 0.1, the target held):"
     );
     println!();
-    println!("| tracker | mean AUC | with the truth's size | with the truth's centre |");
-    println!("|---|---|---|---|");
-    for (r, per_seq, (size, centre), _) in order {
+    println!("| tracker | mean AUC | with the truth's size | with the truth's centre | the same where held |");
+    println!("|---|---|---|---|---|");
+    for (r, per_seq, (size, centre, held), _) in order {
         let auc = per_seq.iter().sum::<f64>() / per_seq.len().max(1) as f64;
-        println!("| {} | {auc:.3} | {size:.3} ({:+.3}) | {centre:.3} ({:+.3}) |", r.name, size - auc, centre - auc);
+        println!(
+            "| {} | {auc:.3} | {size:.3} ({:+.3}) | {centre:.3} ({:+.3}) | {held:.3} ({:+.3}) |",
+            r.name,
+            size - auc,
+            centre - auc,
+            held - auc
+        );
     }
     let names: Vec<&str> = sets.iter().map(|(s, ..)| s.name.as_str()).collect();
     between_runs(&names, &per_runs, &folder_of, split);
