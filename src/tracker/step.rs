@@ -75,6 +75,17 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         let was_tracking = self.state == TrackState::Tracking;
         let taken = !was_tracking && apart.taken(&look.ellipse);
         let event = self.life_cycle(look.found && !stuck && !taken);
+        if matches!(event, Some(Event::Acquired | Event::Reacquired)) {
+            // Found again, the target is followed from the box that found
+            // it: the hypotheses the search left scattered would otherwise
+            // draw the next estimate back to look-alikes. Each keeps its
+            // velocity, so that a moving target is not left behind.
+            let at = Particle::at(&look.ellipse);
+            for p in self.particles.iter_mut() {
+                *p = Particle { vx: p.vx, vy: p.vy, ..at };
+            }
+            self.weights = [1.0 / N as Real; N];
+        }
         self.settled |= self.state == TrackState::Tracking && self.misses == 0;
         self.follow(&look.ellipse, was_tracking);
         let model_updated = self.adapt(scratch, frame, &look, event, stuck);
@@ -157,11 +168,20 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
             None => [None; SPOTS],
         };
         let found = spots.iter().flatten().count();
+        // While lost, the first of the others go back to where the target
+        // was last found: one that went behind something reappears there,
+        // and the rest of the search, spread wider, is most often on
+        // look-alikes by then.
+        let back = if *state == TrackState::Lost { reseed / BACK_SHARE } else { 0 };
         // Spread over the set: copies of one parent tend to sit together.
         let stride = N.checked_div(reseed).unwrap_or(N).max(1);
         for (i, p) in particles.iter_mut().step_by(stride).take(reseed).enumerate() {
             // Every other re-drawn particle goes to one of the spots in turn.
-            let spot = if i % 2 == 0 && found > 0 { spots.get(i / 2 % found).copied().flatten() } else { None };
+            let spot = if i % 2 == 0 && found > 0 {
+                spots.get(i / 2 % found).copied().flatten()
+            } else {
+                (i < back).then_some((fx, fy))
+            };
             *p = match spot {
                 Some((x, y)) => {
                     let s = 0.1 * sqrt(4.0 * hx * hy);
@@ -509,6 +529,10 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
 /// How far from its last estimate, in its larger half axis, a missed
 /// target is looked for ([`Redetect::Near`]).
 const NEAR_REACH: Real = 4.0;
+
+/// One in this many of the particles re-drawn while the target is lost is
+/// drawn about where it was last found.
+const BACK_SHARE: usize = 4;
 
 /// A target moving more than this share of its size a frame is fast
 /// ([`Redetect::Near`]).

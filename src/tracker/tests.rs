@@ -695,9 +695,7 @@ fn a_widening_search_finds_the_target_again_where_it_was_lost() {
     // by 0.05 of the 8 px half axis a frame from 4 half axes, it reaches
     // (4 + 0.05 · 40) · 8 = 48 px from the last place by the end: no
     // particle is re-drawn near the look-alike, so on every seed the
-    // tracker is found again on the target. The whole frame's search (the
-    // default) draws particles over both: on seed 2 it is not found again
-    // within the 20 frames.
+    // tracker is found again on the target.
     let (seen, both) = (wide_scene(&[40]), wide_scene(&[40, 264]));
     let cfg = Config { lost_search: LostSearch::Widening { growth: 0.05 }, ..Config::default() };
     let start = BoundingBox::new(40.0, 112.0, 16.0, 16.0);
@@ -706,6 +704,66 @@ fn a_widening_search_finds_the_target_again_where_it_was_lost() {
         let (i, e) = found.unwrap_or_else(|| panic!("seed {seed}: not found again"));
         assert!((e.cx - 48.0).abs() < 4.0 && (e.cy - 120.0).abs() < 4.0, "seed {seed}, frame {i}: {e:?}");
     }
+}
+
+#[test]
+fn a_quarter_of_the_lost_search_goes_back_to_where_the_target_was_last_found() {
+    // Reason: the rule's definition. Lost, a quarter of the particles
+    // re-drawn each step (a quarter of 100: 25, so 6) are drawn about the
+    // place the target was last found, each coordinate within 3.46 times
+    // 0.1 of the target's 16 px size (the normal draws' tails): within
+    // 8 px of it. The rest of the set is moved 200 px away first, and the
+    // other re-drawn particles land anywhere in the search's square (half
+    // side at least 32 px): at most a few of them fall within the 8 px, on
+    // every seed and with either search.
+    for (search, seed) in [(LostSearch::Frame, 1), (LostSearch::Widening { growth: 0.05 }, 2)] {
+        let (seen, none) = (wide_scene(&[40]), wide_scene(&[]));
+        let mut t: Tracker<100> = Tracker::new(Config { lost_search: search, ..Config::default() }, seed).unwrap();
+        t.init(&wide_frame(&seen), BoundingBox::new(40.0, 112.0, 16.0, 16.0)).unwrap();
+        for _ in 0..5 {
+            t.step(&wide_frame(&seen)).unwrap();
+        }
+        for _ in 0..10 {
+            t.step(&wide_frame(&none)).unwrap();
+        }
+        assert_eq!(t.state(), TrackState::Lost);
+        let (fx, fy) = t.track.target.as_ref().unwrap().found_at;
+        for p in t.track.particles.iter_mut() {
+            p.x = fx + 200.0;
+        }
+        t.track.predict(&mut t.scratch, &wide_frame(&none), None, 100);
+        let back = t.track.particles.iter().filter(|p| (p.x - fx).hypot(p.y - fy) <= 8.0).count();
+        assert!((6..=9).contains(&back), "{search:?}: {back} particles about the place last found");
+    }
+}
+
+#[test]
+fn a_target_found_again_is_followed_from_the_box_that_found_it() {
+    // Reason: the rule's definition. On the frame that reports the target
+    // re-acquired, every hypothesis is moved to the estimate's box (its
+    // centre and half axes) and weighs the same, keeping its velocity:
+    // the search's scattered hypotheses no longer draw the next estimate.
+    let (seen, none) = (wide_scene(&[40]), wide_scene(&[]));
+    let mut t: Tracker<100> = Tracker::new(Config::default(), 3).unwrap();
+    t.init(&wide_frame(&seen), BoundingBox::new(40.0, 112.0, 16.0, 16.0)).unwrap();
+    for _ in 0..5 {
+        t.step(&wide_frame(&seen)).unwrap();
+    }
+    for _ in 0..20 {
+        t.step(&wide_frame(&none)).unwrap();
+    }
+    assert_eq!(t.state(), TrackState::Lost);
+    let e = (0..20)
+        .map(|_| t.step(&wide_frame(&seen)).unwrap())
+        .find(|e| e.event == Some(crate::estimate::Event::Reacquired))
+        .expect("found again");
+    let w = t.track.weights[0];
+    for (p, &pw) in t.track.particles.iter().zip(t.track.weights.iter()) {
+        assert_eq!((p.x, p.y, p.hx, p.hy), (e.ellipse.cx, e.ellipse.cy, e.ellipse.hx, e.ellipse.hy));
+        assert_eq!(pw, w);
+    }
+    // Not all at rest: each kept its own velocity.
+    assert!(t.track.particles.iter().any(|p| p.vx != 0.0 || p.vy != 0.0));
 }
 
 #[test]
