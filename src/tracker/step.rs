@@ -176,7 +176,8 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
         // Spread over the set: copies of one parent tend to sit together.
         let stride = N.checked_div(reseed).unwrap_or(N).max(1);
         for (i, p) in particles.iter_mut().step_by(stride).take(reseed).enumerate() {
-            // Every other re-drawn particle goes to one of the spots in turn.
+            // Every other re-drawn particle goes to one of the spots in turn,
+            // the first of the rest back to the place last found.
             let spot = if i % 2 == 0 && found > 0 {
                 spots.get(i / 2 % found).copied().flatten()
             } else {

@@ -706,6 +706,22 @@ fn a_widening_search_finds_the_target_again_where_it_was_lost() {
     }
 }
 
+/// Under `cfg` and `seed`: learns the 16 px target at (40, 112) in an
+/// otherwise empty frame, tracks it there for 5 frames, then steps on `empty`
+/// empty frames.
+fn tracked_then_hidden(cfg: Config, seed: u64, empty: usize) -> Tracker<100> {
+    let (seen, none) = (wide_scene(&[40]), wide_scene(&[]));
+    let mut t: Tracker<100> = Tracker::new(cfg, seed).unwrap();
+    t.init(&wide_frame(&seen), BoundingBox::new(40.0, 112.0, 16.0, 16.0)).unwrap();
+    for _ in 0..5 {
+        t.step(&wide_frame(&seen)).unwrap();
+    }
+    for _ in 0..empty {
+        t.step(&wide_frame(&none)).unwrap();
+    }
+    t
+}
+
 #[test]
 fn a_quarter_of_the_lost_search_goes_back_to_where_the_target_was_last_found() {
     // Reason: the rule's definition. Lost, a quarter of the particles
@@ -717,21 +733,13 @@ fn a_quarter_of_the_lost_search_goes_back_to_where_the_target_was_last_found() {
     // side at least 32 px): at most a few of them fall within the 8 px, on
     // every seed and with either search.
     for (search, seed) in [(LostSearch::Frame, 1), (LostSearch::Widening { growth: 0.05 }, 2)] {
-        let (seen, none) = (wide_scene(&[40]), wide_scene(&[]));
-        let mut t: Tracker<100> = Tracker::new(Config { lost_search: search, ..Config::default() }, seed).unwrap();
-        t.init(&wide_frame(&seen), BoundingBox::new(40.0, 112.0, 16.0, 16.0)).unwrap();
-        for _ in 0..5 {
-            t.step(&wide_frame(&seen)).unwrap();
-        }
-        for _ in 0..10 {
-            t.step(&wide_frame(&none)).unwrap();
-        }
+        let mut t = tracked_then_hidden(Config { lost_search: search, ..Config::default() }, seed, 10);
         assert_eq!(t.state(), TrackState::Lost);
         let (fx, fy) = t.track.target.as_ref().unwrap().found_at;
         for p in t.track.particles.iter_mut() {
             p.x = fx + 200.0;
         }
-        t.track.predict(&mut t.scratch, &wide_frame(&none), None, 100);
+        t.track.predict(&mut t.scratch, &wide_frame(&wide_scene(&[])), None, 100);
         let back = t.track.particles.iter().filter(|p| (p.x - fx).hypot(p.y - fy) <= 8.0).count();
         assert!((6..=9).contains(&back), "{search:?}: {back} particles about the place last found");
     }
@@ -743,15 +751,8 @@ fn a_target_found_again_is_followed_from_the_box_that_found_it() {
     // re-acquired, every hypothesis is moved to the estimate's box (its
     // centre and half axes) and weighs the same, keeping its velocity:
     // the search's scattered hypotheses no longer draw the next estimate.
-    let (seen, none) = (wide_scene(&[40]), wide_scene(&[]));
-    let mut t: Tracker<100> = Tracker::new(Config::default(), 3).unwrap();
-    t.init(&wide_frame(&seen), BoundingBox::new(40.0, 112.0, 16.0, 16.0)).unwrap();
-    for _ in 0..5 {
-        t.step(&wide_frame(&seen)).unwrap();
-    }
-    for _ in 0..20 {
-        t.step(&wide_frame(&none)).unwrap();
-    }
+    let seen = wide_scene(&[40]);
+    let mut t = tracked_then_hidden(Config::default(), 3, 20);
     assert_eq!(t.state(), TrackState::Lost);
     let e = (0..20)
         .map(|_| t.step(&wide_frame(&seen)).unwrap())
