@@ -14,7 +14,7 @@ use crate::foreground::RING;
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
 use crate::likelihood::gaussian;
-use crate::scalar::{Real, sqrt};
+use crate::scalar::{Real, clamp, sqrt};
 use rand_core::Rng;
 
 impl<const N: usize, const K: usize, const E: usize, R: Rng, const T: usize> Tracker<N, K, E, R, T> {
@@ -195,7 +195,11 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
                     } else {
                         (0.0, 0.0)
                     };
-                    Particle { x: x + s * dx, y: y + s * dy, vx, vy, hx, hy }
+                    // A place near the frame's border may be jittered
+                    // across it: centres stay inside, as the dynamics keep
+                    // them.
+                    let (x, y) = (clamp(x + s * dx, 0.0, bounds.width), clamp(y + s * dy, 0.0, bounds.height));
+                    Particle { x, y, vx, vy, hx, hy }
                 }
                 // Near the target, only the places: the rest of the set
                 // goes on tracking.

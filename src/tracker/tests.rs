@@ -746,6 +746,26 @@ fn a_quarter_of_the_lost_search_goes_back_to_where_the_target_was_last_found() {
 }
 
 #[test]
+fn a_lost_search_about_a_place_on_the_border_stays_inside_the_frame() {
+    // Reason: the state's constraint (centres inside the frame, as the
+    // dynamics keep them). The estimate can rest on the border, where the
+    // particles wait for a target that left, so the place last found can
+    // be the frame's corner; the draws about it fall on both sides of it,
+    // and every one that crossed the border must be brought back.
+    let mut t = tracked_then_hidden(Config::default(), 1, 10);
+    assert_eq!(t.state(), TrackState::Lost);
+    t.track.target.as_mut().unwrap().found_at = (0.0, 0.0);
+    let frame = wide_scene(&[]);
+    let frame = wide_frame(&frame);
+    t.track.predict(&mut t.scratch, &frame, None, 100);
+    let (w, h) = (frame.width() as Real, frame.height() as Real);
+    for p in t.track.particles.iter() {
+        assert!((0.0..=w).contains(&p.x) && (0.0..=h).contains(&p.y), "{p:?} outside {w}x{h}");
+    }
+    assert!(t.track.particles.iter().filter(|p| p.x.hypot(p.y) <= 8.0).count() >= 6);
+}
+
+#[test]
 fn a_target_found_again_is_followed_from_the_box_that_found_it() {
     // Reason: the rule's definition. On the frame that reports the target
     // re-acquired, every hypothesis is moved to the estimate's box (its
