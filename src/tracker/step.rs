@@ -197,7 +197,9 @@ impl<const N: usize, const K: usize, R: Rng, const T: usize> Track<N, K, R, T> {
                     };
                     // A place near the frame's border may be jittered
                     // across it: centres stay inside, as the dynamics keep
-                    // them.
+                    // them. Clamped rather than through `keep_inside`: the
+                    // velocity is the draw's own, and resetting it took
+                    // flash the `Config::fast` build has not got.
                     let (x, y) = (clamp(x + s * dx, 0.0, bounds.width), clamp(y + s * dy, 0.0, bounds.height));
                     Particle { x, y, vx, vy, hx, hy }
                 }

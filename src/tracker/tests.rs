@@ -755,8 +755,8 @@ fn a_lost_search_about_a_place_on_the_border_stays_inside_the_frame() {
     let mut t = tracked_then_hidden(Config::default(), 1, 10);
     assert_eq!(t.state(), TrackState::Lost);
     t.track.target.as_mut().unwrap().found_at = (0.0, 0.0);
-    let frame = wide_scene(&[]);
-    let frame = wide_frame(&frame);
+    let pixels = wide_scene(&[]);
+    let frame = wide_frame(&pixels);
     t.track.predict(&mut t.scratch, &frame, None, 100);
     let (w, h) = (frame.width() as Real, frame.height() as Real);
     for p in t.track.particles.iter() {
