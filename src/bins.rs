@@ -15,7 +15,7 @@
 
 use crate::colour::{ADAPTIVE_LEVELS, levels_bin};
 use crate::cue::not_built;
-use crate::error::ConfigError;
+use crate::error::Checks;
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
 use crate::histogram::Histogram;
@@ -54,11 +54,10 @@ pub fn birge_rozenholc(counts: &[u32]) -> Real {
 /// Asking for adaptive bins in a build without them is an error that names
 /// the feature.
 #[inline]
-pub(crate) fn validate(binning: crate::colour::Binning) -> Result<(), ConfigError> {
+pub(crate) fn validate(c: &mut Checks, binning: crate::colour::Binning) {
     if binning == crate::colour::Binning::Adaptive && !cfg!(feature = "adaptive-bins") {
-        return Err(not_built("binning", "adaptive-bins"));
+        c.fail(not_built("binning", "adaptive-bins"));
     }
-    Ok(())
 }
 
 /// The levels per channel of each segment under `binning`: chosen by

@@ -12,7 +12,7 @@
 
 use crate::cue::not_built;
 use crate::edges::sobel;
-use crate::error::{ConfigError, check};
+use crate::error::Checks;
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
 use crate::pixel::luma;
@@ -34,12 +34,12 @@ pub struct BoundaryCue {
 /// Checks the settings; asking for the cue in a build without it is an
 /// error that names the feature.
 #[inline]
-pub(crate) fn validate(settings: Option<BoundaryCue>) -> Result<(), ConfigError> {
-    let Some(b) = settings else { return Ok(()) };
+pub(crate) fn validate(c: &mut Checks, settings: Option<BoundaryCue>) {
+    let Some(b) = settings else { return };
     if !cfg!(feature = "boundary") {
-        return Err(not_built("boundary", "boundary"));
+        c.fail(not_built("boundary", "boundary"));
     }
-    check("boundary.weight", b.weight, 0.0, 1.0)
+    c.share("boundary.weight", b.weight);
 }
 
 /// Whether the cue is on: asked for in `settings`, and built (the

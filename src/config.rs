@@ -4,7 +4,7 @@ use crate::boundary::BoundaryCue;
 use crate::colour::Binning;
 use crate::correlation::{CorrelationCue, GradientCue};
 use crate::edges::EdgeCue;
-use crate::error::{ConfigError, ParamProblem, check, positive};
+use crate::error::{Checks, ConfigError};
 use crate::filter::{Dynamics, Resampling};
 use crate::foreground::BackgroundWeight;
 use crate::histogram::Similarity;
@@ -551,121 +551,130 @@ impl Config {
 
     /// Checks every field against its documented range.
     pub fn validate(&self) -> Result<(), ConfigError> {
+        let mut c = Checks::new();
         match self.likelihood.sigma {
-            Sigma::Fixed(s) => positive("likelihood.sigma", s, 10.0)?,
+            Sigma::Fixed(s) => c.positive("likelihood.sigma", s, 10.0),
             Sigma::Spread { spread, min, max } => {
-                positive("likelihood.sigma.spread", spread, 100.0)?;
-                positive("likelihood.sigma.min", min, 10.0)?;
-                positive("likelihood.sigma.max", max, 10.0)?;
-                if min > max {
-                    return Err(ConfigError { field: "likelihood.sigma.max", problem: ParamProblem::OutOfRange });
-                }
+                c.positive("likelihood.sigma.spread", spread, 100.0);
+                c.positive("likelihood.sigma.min", min, 10.0);
+                c.positive("likelihood.sigma.max", max, 10.0);
+                c.out_of_range_if(min > max, "likelihood.sigma.max");
             }
             Sigma::Adaptive { min, max } => {
-                positive("likelihood.sigma.min", min, 10.0)?;
-                positive("likelihood.sigma.max", max, 10.0)?;
-                if min > max {
-                    return Err(ConfigError { field: "likelihood.sigma.max", problem: ParamProblem::OutOfRange });
-                }
+                c.positive("likelihood.sigma.min", min, 10.0);
+                c.positive("likelihood.sigma.max", max, 10.0);
+                c.out_of_range_if(min > max, "likelihood.sigma.max");
             }
         }
-        check("likelihood.eps", self.likelihood.eps, 0.0, 1.0)?;
+        c.share("likelihood.eps", self.likelihood.eps);
         if let Combination::Weighted { colour } = self.combination {
-            check("combination.colour", colour, 0.0, 1.0)?;
+            c.share("combination.colour", colour);
         }
         if let Some(e) = self.edges {
-            if !matches!(e.bins, 2 | 4 | 8 | 16) {
-                return Err(ConfigError { field: "edges.bins", problem: ParamProblem::OutOfRange });
-            }
-            if e.threshold > 1500 {
-                return Err(ConfigError { field: "edges.threshold", problem: ParamProblem::OutOfRange });
-            }
-            if e.strong_percent > 100 {
-                return Err(ConfigError { field: "edges.strong_percent", problem: ParamProblem::OutOfRange });
-            }
+            c.out_of_range_if(!matches!(e.bins, 2 | 4 | 8 | 16), "edges.bins");
+            c.out_of_range_if(e.threshold > 1500, "edges.threshold");
+            c.out_of_range_if(e.strong_percent > 100, "edges.strong_percent");
         }
         if let Some(t) = self.table {
-            if !(1..=16).contains(&t.spacing) {
-                return Err(ConfigError { field: "table.spacing", problem: ParamProblem::OutOfRange });
-            }
+            c.out_of_range_if(!(1..=16).contains(&t.spacing), "table.spacing");
             // The window's histogram is whole-ellipse, and only the
             // Bhattacharyya sum can be kept up to date pixel by pixel.
-            if self.quadrants || self.similarity != crate::histogram::Similarity::Bhattacharyya {
-                return Err(ConfigError { field: "table", problem: ParamProblem::OutOfRange });
-            }
+            c.out_of_range_if(
+                self.quadrants || self.similarity != crate::histogram::Similarity::Bhattacharyya,
+                "table",
+            );
         }
-        crate::boundary::validate(self.boundary)?;
+        crate::boundary::validate(&mut c, self.boundary);
         let d = &self.dynamics;
-        check("dynamics.position_noise", d.position_noise, 0.0, 10.0)?;
-        check("dynamics.velocity_noise", d.velocity_noise, 0.0, 10.0)?;
-        check("dynamics.velocity_decay", d.velocity_decay, 0.0, 1.0)?;
-        check("dynamics.speed_noise", d.speed_noise, 0.0, 10.0)?;
-        check("dynamics.scale_noise", d.scale_noise, 0.0, 0.5)?;
-        crate::motion::validate(self.scene_motion)?;
-        crate::correlation::validate(self.correlation)?;
-        crate::correlation::validate_gradient(self.gradient)?;
-        crate::histogram::validate_quadrants(self.quadrants)?;
-        crate::bins::validate(self.binning)?;
-        check("alpha", self.alpha, 0.0, 1.0)?;
+        c.range("dynamics.position_noise", d.position_noise, 0.0, 10.0);
+        c.range("dynamics.velocity_noise", d.velocity_noise, 0.0, 10.0);
+        c.share("dynamics.velocity_decay", d.velocity_decay);
+        c.range("dynamics.speed_noise", d.speed_noise, 0.0, 10.0);
+        c.range("dynamics.scale_noise", d.scale_noise, 0.0, 0.5);
+        crate::motion::validate(&mut c, self.scene_motion);
+        crate::correlation::validate(&mut c, self.correlation);
+        crate::correlation::validate_gradient(&mut c, self.gradient);
+        crate::histogram::validate_quadrants(&mut c, self.quadrants);
+        crate::bins::validate(&mut c, self.binning);
+        c.share("alpha", self.alpha);
         if let ModelUpdate::WhenDegraded { factor, frames } = self.model_update {
-            check("model_update.factor", factor, 0.0, 1.0)?;
-            if frames == 0 || frames > 1000 {
-                return Err(ConfigError { field: "model_update.frames", problem: ParamProblem::OutOfRange });
-            }
+            c.share("model_update.factor", factor);
+            c.out_of_range_if(frames == 0 || frames > 1000, "model_update.frames");
         }
-        check("update_threshold", self.update_threshold, 0.0, 1.0)?;
-        positive("update_sigma", self.update_sigma, 10.0)?;
-        check("appearance_sigmas", self.appearance_sigmas, 0.0, 100.0)?;
-        check("min_appearance", self.min_appearance, 0.0, 1.0)?;
-        positive("kickoff", self.kickoff, 1.0)?;
-        if self.lost_after == 0 || self.lost_after > 1000 {
-            return Err(ConfigError { field: "lost_after", problem: ParamProblem::OutOfRange });
-        }
-        check("reseed_fraction", self.reseed_fraction, 0.0, 1.0)?;
+        c.share("update_threshold", self.update_threshold);
+        c.positive("update_sigma", self.update_sigma, 10.0);
+        c.range("appearance_sigmas", self.appearance_sigmas, 0.0, 100.0);
+        c.share("min_appearance", self.min_appearance);
+        c.positive("kickoff", self.kickoff, 1.0);
+        c.out_of_range_if(self.lost_after == 0 || self.lost_after > 1000, "lost_after");
+        c.share("reseed_fraction", self.reseed_fraction);
         if let LostSearch::Widening { growth } = self.lost_search {
-            check("lost_search.growth", growth, 0.0, 10.0)?;
+            c.range("lost_search.growth", growth, 0.0, 10.0);
         }
-        check("min_half_axis", self.min_half_axis, 1.0, (crate::pixel::MAX_DIMENSION / 2) as Real)?;
+        c.range("min_half_axis", self.min_half_axis, 1.0, (crate::pixel::MAX_DIMENSION / 2) as Real);
         if let Some(t) = self.template {
-            check("template.weight", t.weight, 0.0, 1.0)?;
-            check("template.rate", t.rate, 0.0, 1.0)?;
+            c.share("template.weight", t.weight);
+            c.share("template.rate", t.rate);
         }
-        if !(self.sure_share > 0.0 && self.sure_share <= 1.0) {
-            return Err(ConfigError { field: "sure_share", problem: ParamProblem::OutOfRange });
-        }
+        c.out_of_range_if(!(self.sure_share > 0.0 && self.sure_share <= 1.0), "sure_share");
         if let Life::Confidence { lost_below, found_above } = self.life {
-            check("life.lost_below", lost_below, 0.0, 1.0)?;
-            check("life.found_above", found_above, 0.0, 1.0)?;
+            c.share("life.lost_below", lost_below);
+            c.share("life.found_above", found_above);
         }
         if let Some(s) = self.size {
-            positive("size.step", s.step, 0.5)?;
-            check("size.similarity", s.similarity, 0.0, 10.0)?;
-            check("size.aspect_pull", s.aspect_pull, 0.0, 10.0)?;
-            check("size.scale_pull", s.scale_pull, 0.0, 10.0)?;
-            check("size.template", s.template, 0.0, 10.0)?;
+            c.positive("size.step", s.step, 0.5);
+            c.range("size.similarity", s.similarity, 0.0, 10.0);
+            c.range("size.aspect_pull", s.aspect_pull, 0.0, 10.0);
+            c.range("size.scale_pull", s.scale_pull, 0.0, 10.0);
+            c.range("size.template", s.template, 0.0, 10.0);
         }
         if let Some(s) = self.shift {
-            positive("shift.step", s.step, 0.5)?;
-            check("shift.rounds", s.rounds as Real, 1.0, 8.0)?;
-            check("shift.similarity", s.similarity, 0.0, 10.0)?;
-            check("shift.template", s.template, 0.0, 10.0)?;
+            c.positive("shift.step", s.step, 0.5);
+            c.range("shift.rounds", s.rounds as Real, 1.0, 8.0);
+            c.range("shift.similarity", s.similarity, 0.0, 10.0);
+            c.range("shift.template", s.template, 0.0, 10.0);
         }
-        check("surroundings_rate", self.surroundings_rate, 0.0, 1.0)?;
+        c.share("surroundings_rate", self.surroundings_rate);
         if let Some(b) = self.background_weight {
-            check("background_weight.strength", b.strength, 0.0, 1.0)?;
-            check("background_weight.above", b.above, 0.0, 0.95)?;
+            c.share("background_weight.strength", b.strength);
+            c.range("background_weight.above", b.above, 0.0, 0.95);
         }
-        Ok(())
+        c.result()
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::ParamProblem;
 
     #[test]
     fn default_is_valid() {
         assert_eq!(Config::default().validate(), Ok(()));
+    }
+
+    #[test]
+    fn of_several_bad_fields_the_first_checked_is_named() {
+        // Every check runs; the error must still be the first in the order
+        // the checks are written (alpha, then kickoff, then lost_after), as
+        // if each check returned early.
+        let c = Config { alpha: 1.5, kickoff: 0.0, lost_after: 0, ..Config::default() };
+        assert_eq!(c.validate(), Err(ConfigError { field: "alpha", problem: ParamProblem::OutOfRange }));
+        let c = Config { kickoff: 0.0, lost_after: 0, ..Config::default() };
+        assert_eq!(c.validate(), Err(ConfigError { field: "kickoff", problem: ParamProblem::OutOfRange }));
+        // A cue that is not built is refused by name before its own fields
+        // are read: their problems are not the one reported.
+        let c = Config {
+            gradient: Some(crate::GradientCue { rate: Real::NAN, ..crate::GradientCue::MEASURED }),
+            alpha: 1.5,
+            ..Config::default()
+        };
+        let first = if cfg!(feature = "gradient") {
+            ConfigError { field: "gradient.rate", problem: ParamProblem::NonFinite }
+        } else {
+            crate::cue::not_built("gradient", "gradient")
+        };
+        assert_eq!(c.validate(), Err(first));
     }
 
     #[test]

@@ -245,23 +245,72 @@ impl core::error::Error for ConfigError {}
 impl core::error::Error for RegionError {}
 impl core::error::Error for Error {}
 
-/// `v` must be finite and in `[lo, hi]`; the error names `field`. The one
-/// range check of every configuration in the crate. Out of line: inlined at
-/// each of its calls, it would take flash for no speed that matters (a
-/// configuration is checked once).
-#[inline(never)]
+/// `v` must be finite and in `[lo, hi]`; the error names `field`: the
+/// range check of a configuration checked on its own ([`Checks::range`]).
 pub(crate) fn check(field: &'static str, v: Real, lo: Real, hi: Real) -> Result<(), ConfigError> {
-    if !v.is_finite() {
-        return Err(ConfigError { field, problem: ParamProblem::NonFinite });
-    }
-    if !(v >= lo && v <= hi) {
-        return Err(ConfigError { field, problem: ParamProblem::OutOfRange });
-    }
-    Ok(())
+    let mut c = Checks::new();
+    c.range(field, v, lo, hi);
+    c.result()
 }
 
-/// `v` must be in `(0, hi]` (finite, positive); the error names `field`.
-pub(crate) fn positive(field: &'static str, v: Real, hi: Real) -> Result<(), ConfigError> {
-    check(field, v, 0.0, hi)?;
-    if v > 0.0 { Ok(()) } else { Err(ConfigError { field, problem: ParamProblem::OutOfRange }) }
+/// A configuration's checks, made in order, of which the first to fail is
+/// the one reported. Each check is a call with nothing after it (a failing
+/// check records its error unless an earlier one has), not a branch and an
+/// early return: a configuration has about eighty, checked once, and the
+/// early returns took flash (docs/performance.md).
+pub(crate) struct Checks(Result<(), ConfigError>);
+
+impl Checks {
+    /// No check made yet.
+    pub(crate) const fn new() -> Self {
+        Checks(Ok(()))
+    }
+
+    /// The first problem recorded, if any.
+    pub(crate) fn result(self) -> Result<(), ConfigError> {
+        self.0
+    }
+
+    /// Records `e` unless an earlier check failed.
+    #[inline(never)]
+    pub(crate) fn fail(&mut self, e: ConfigError) {
+        if self.0.is_ok() {
+            self.0 = Err(e);
+        }
+    }
+
+    /// `v` must be finite and in `[lo, hi]`. The one range check of every
+    /// configuration in the crate. Out of line: inlined at each of its
+    /// calls, it would take flash for no speed that matters (a
+    /// configuration is checked once).
+    #[inline(never)]
+    pub(crate) fn range(&mut self, field: &'static str, v: Real, lo: Real, hi: Real) {
+        if !v.is_finite() {
+            self.fail(ConfigError { field, problem: ParamProblem::NonFinite });
+        } else if !(v >= lo && v <= hi) {
+            self.fail(ConfigError { field, problem: ParamProblem::OutOfRange });
+        }
+    }
+
+    /// A share: `v` finite and in `[0, 1]`. Most of a configuration's
+    /// numbers are, and the call without the bounds takes less flash.
+    #[inline(never)]
+    pub(crate) fn share(&mut self, field: &'static str, v: Real) {
+        self.range(field, v, 0.0, 1.0);
+    }
+
+    /// `v` finite and in `(0, hi]`.
+    #[inline(never)]
+    pub(crate) fn positive(&mut self, field: &'static str, v: Real, hi: Real) {
+        self.range(field, v, 0.0, hi);
+        self.out_of_range_if(v <= 0.0, field);
+    }
+
+    /// `field` is out of its range where `bad`.
+    #[inline(never)]
+    pub(crate) fn out_of_range_if(&mut self, bad: bool, field: &'static str) {
+        if bad {
+            self.fail(ConfigError { field, problem: ParamProblem::OutOfRange });
+        }
+    }
 }

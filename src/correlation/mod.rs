@@ -20,7 +20,7 @@ mod series;
 #[cfg(not(all(feature = "correlation", feature = "gradient")))]
 use crate::cue::Absent;
 use crate::cue::not_built;
-use crate::error::{ConfigError, check, positive};
+use crate::error::Checks;
 use crate::scalar::Real;
 
 #[cfg(feature = "correlation")]
@@ -59,19 +59,19 @@ pub(crate) const DEFAULT: Option<CorrelationCue> =
 /// error that names the feature.
 // Inlined into `Config::validate`, the one caller, as its other checks are.
 #[inline(always)]
-pub(crate) fn validate(settings: Option<CorrelationCue>) -> Result<(), ConfigError> {
-    let Some(c) = settings else { return Ok(()) };
+pub(crate) fn validate(c: &mut Checks, settings: Option<CorrelationCue>) {
+    let Some(s) = settings else { return };
     if !cfg!(feature = "correlation") {
-        return Err(not_built("correlation", "correlation"));
+        c.fail(not_built("correlation", "correlation"));
     }
-    check("correlation.padding", c.padding, 1.0, 4.0)?;
-    positive("correlation.rate", c.rate, 1.0)?;
-    check("correlation.learn_above", c.learn_above, 0.0, 1.0)?;
-    check("correlation.pull", c.pull, 0.0, 1.0)?;
-    check("correlation.scale_step", c.scale_step, 0.0, 0.2)?;
-    check("correlation.scale_pull", c.scale_pull, 0.0, 1.0)?;
-    check("correlation.min_psr", c.min_psr, 0.0, 20.0)?;
-    check("correlation.centre_bias", c.centre_bias, 0.0, 1.0)
+    c.range("correlation.padding", s.padding, 1.0, 4.0);
+    c.positive("correlation.rate", s.rate, 1.0);
+    c.share("correlation.learn_above", s.learn_above);
+    c.share("correlation.pull", s.pull);
+    c.range("correlation.scale_step", s.scale_step, 0.0, 0.2);
+    c.share("correlation.scale_pull", s.scale_pull);
+    c.range("correlation.min_psr", s.min_psr, 0.0, 20.0);
+    c.share("correlation.centre_bias", s.centre_bias);
 }
 
 /// A correlation filter (MOSSE) on the grey levels of a window around the
@@ -170,30 +170,28 @@ impl CorrelationCue {
 /// it is an error that names the feature.
 // Inlined into `Config::validate`, the one caller, as its other checks are.
 #[inline(always)]
-pub(crate) fn validate_gradient(settings: Option<GradientCue>) -> Result<(), ConfigError> {
-    let Some(c) = settings else { return Ok(()) };
+pub(crate) fn validate_gradient(c: &mut Checks, settings: Option<GradientCue>) {
+    let Some(g) = settings else { return };
     if !cfg!(feature = "gradient") {
-        return Err(not_built("gradient", "gradient"));
+        c.fail(not_built("gradient", "gradient"));
     }
-    positive("gradient.rate", c.rate, 1.0)?;
-    check("gradient.learn_above", c.learn_above, 0.0, 1.0)?;
-    if c.learn_every == 0 {
-        return Err(ConfigError { field: "gradient.learn_every", problem: crate::error::ParamProblem::OutOfRange });
+    c.positive("gradient.rate", g.rate, 1.0);
+    c.share("gradient.learn_above", g.learn_above);
+    c.out_of_range_if(g.learn_every == 0, "gradient.learn_every");
+    c.share("gradient.pull", g.pull);
+    c.share("gradient.grey_pull", g.grey_pull);
+    c.range("gradient.scale_step", g.scale_step, 0.0, 0.2);
+    c.share("gradient.scale_pull", g.scale_pull);
+    c.range("gradient.min_psr", g.min_psr, 0.0, 20.0);
+    c.share("gradient.blend", g.blend);
+    c.range("gradient.relearn_below", g.relearn_below, 0.0, 20.0);
+    c.share("gradient.relearn_above", g.relearn_above);
+    c.share("gradient.pyramid_pull", g.pyramid_pull);
+    if g.pyramid_pull > 0.0 && !cfg!(feature = "scale-pyramid") {
+        c.fail(not_built("gradient.pyramid_pull", "scale-pyramid"));
     }
-    check("gradient.pull", c.pull, 0.0, 1.0)?;
-    check("gradient.grey_pull", c.grey_pull, 0.0, 1.0)?;
-    check("gradient.scale_step", c.scale_step, 0.0, 0.2)?;
-    check("gradient.scale_pull", c.scale_pull, 0.0, 1.0)?;
-    check("gradient.min_psr", c.min_psr, 0.0, 20.0)?;
-    check("gradient.blend", c.blend, 0.0, 1.0)?;
-    check("gradient.relearn_below", c.relearn_below, 0.0, 20.0)?;
-    check("gradient.relearn_above", c.relearn_above, 0.0, 1.0)?;
-    check("gradient.pyramid_pull", c.pyramid_pull, 0.0, 1.0)?;
-    if c.pyramid_pull > 0.0 && !cfg!(feature = "scale-pyramid") {
-        return Err(not_built("gradient.pyramid_pull", "scale-pyramid"));
-    }
-    check("gradient.pyramid_learn_above", c.pyramid_learn_above, 0.0, 1.0)?;
-    check("gradient.narrow_above", c.narrow_above, 0.0, 1.0)
+    c.share("gradient.pyramid_learn_above", g.pyramid_learn_above);
+    c.share("gradient.narrow_above", g.narrow_above);
 }
 
 /// A correlation filter on gradient channels over a wide window (the

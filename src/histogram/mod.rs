@@ -19,7 +19,7 @@ use crate::colour::{Binning, levels_bin};
 use crate::cue::not_built;
 use crate::edges::MAX_EDGE_BINS;
 use crate::edges::{EdgeMap, NIBBLE_NONE};
-use crate::error::ConfigError;
+use crate::error::Checks;
 use crate::frame::Frame;
 use crate::geometry::Ellipse;
 use crate::pixel::{self, PixelRead};
@@ -39,11 +39,10 @@ pub(crate) const fn quadrants(on: bool) -> bool {
 /// Asking for quadrants in a build without them is an error that names the
 /// feature.
 #[inline]
-pub(crate) fn validate_quadrants(on: bool) -> Result<(), ConfigError> {
+pub(crate) fn validate_quadrants(c: &mut Checks, on: bool) {
     if on && !cfg!(feature = "quadrants") {
-        return Err(not_built("quadrants", "quadrants"));
+        c.fail(not_built("quadrants", "quadrants"));
     }
-    Ok(())
 }
 
 /// How the bins of a histogram are laid out: the colour binning, whether the

@@ -8,7 +8,7 @@ mod scene;
 #[cfg(not(feature = "scene-motion"))]
 use crate::cue::Absent;
 use crate::cue::not_built;
-use crate::error::ConfigError;
+use crate::error::Checks;
 
 #[cfg(feature = "scene-motion")]
 pub(crate) use scene::SceneMotion;
@@ -33,9 +33,8 @@ pub(crate) fn settings(on: bool) -> Option<On> {
 /// Asking for the test in a build without it is an error that names the
 /// feature.
 #[inline]
-pub(crate) fn validate(on: bool) -> Result<(), ConfigError> {
+pub(crate) fn validate(c: &mut Checks, on: bool) {
     if on && !cfg!(feature = "scene-motion") {
-        return Err(not_built("scene_motion", "scene-motion"));
+        c.fail(not_built("scene_motion", "scene-motion"));
     }
-    Ok(())
 }
