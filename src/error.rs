@@ -245,14 +245,6 @@ impl core::error::Error for ConfigError {}
 impl core::error::Error for RegionError {}
 impl core::error::Error for Error {}
 
-/// `v` must be finite and in `[lo, hi]`; the error names `field`: the
-/// range check of a configuration checked on its own ([`Checks::range`]).
-pub(crate) fn check(field: &'static str, v: Real, lo: Real, hi: Real) -> Result<(), ConfigError> {
-    let mut c = Checks::new();
-    c.range(field, v, lo, hi);
-    c.result()
-}
-
 /// A configuration's checks, made in order, of which the first to fail is
 /// the one reported. Each check is a call with nothing after it (a failing
 /// check records its error unless an earlier one has), not a branch and an

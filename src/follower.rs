@@ -6,8 +6,8 @@
 //! axis); an [`OutputPin`] LED shows whether the target is being tracked.
 //! While the target is lost or searched for, the head holds its position.
 
+use crate::error::Checks;
 use crate::error::ConfigError;
-use crate::error::check;
 use crate::estimate::{Estimate, TrackState};
 use crate::scalar::{Real, clamp};
 use embedded_hal::digital::OutputPin;
@@ -55,12 +55,13 @@ impl Default for FollowerConfig {
 impl FollowerConfig {
     /// Checks every field against its documented range.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        check("follower.kp", self.kp, 0.0, 1.0)?;
-        check("follower.kd", self.kd, 0.0, 1.0)?;
-        check("follower.dead_zone", self.dead_zone, 0.0, 0.99)?;
-        check("follower.duty_min", self.duty_min, 0.0, 1.0)?;
-        check("follower.duty_max", self.duty_max, 0.0, 1.0)?;
-        Ok(())
+        let mut c = Checks::new();
+        c.share("follower.kp", self.kp);
+        c.share("follower.kd", self.kd);
+        c.range("follower.dead_zone", self.dead_zone, 0.0, 0.99);
+        c.share("follower.duty_min", self.duty_min);
+        c.share("follower.duty_max", self.duty_max);
+        c.result()
     }
 }
 

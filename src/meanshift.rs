@@ -51,7 +51,7 @@
 //! ```
 
 use crate::colour::Binning;
-use crate::error::check;
+use crate::error::Checks;
 use crate::error::{ConfigError, Error, ParamProblem, RegionError};
 use crate::estimate::{Estimate, Event, TrackState};
 use crate::frame::Frame;
@@ -134,21 +134,19 @@ impl MeanShiftConfig {
 
     /// Checks every field against its documented range.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        if !(1..=100).contains(&self.max_iterations) {
-            return Err(ConfigError { field: "max_iterations", problem: ParamProblem::OutOfRange });
-        }
-        check("epsilon", self.epsilon, 0.01, 10.0)?;
-        check("scale_step", self.scale_step, 0.0, 0.5)?;
-        check("scale_gamma", self.scale_gamma, 0.0, 1.0)?;
+        let mut c = Checks::new();
+        c.out_of_range_if(!(1..=100).contains(&self.max_iterations), "max_iterations");
+        c.range("epsilon", self.epsilon, 0.01, 10.0);
+        c.range("scale_step", self.scale_step, 0.0, 0.5);
+        c.share("scale_gamma", self.scale_gamma);
         if let Prediction::Kalman { process, measurement } = self.prediction {
-            check("prediction.process", process, 0.001, 1000.0)?;
-            check("prediction.measurement", measurement, 0.001, 1000.0)?;
+            c.range("prediction.process", process, 0.001, 1000.0);
+            c.range("prediction.measurement", measurement, 0.001, 1000.0);
         }
-        check("min_similarity", self.min_similarity, 0.0, 1.0)?;
-        if self.lost_after == 0 || self.lost_after > 1000 {
-            return Err(ConfigError { field: "lost_after", problem: ParamProblem::OutOfRange });
-        }
-        check("min_half_axis", self.min_half_axis, 1.0, (crate::pixel::MAX_DIMENSION / 2) as Real)
+        c.share("min_similarity", self.min_similarity);
+        c.out_of_range_if(self.lost_after == 0 || self.lost_after > 1000, "lost_after");
+        c.range("min_half_axis", self.min_half_axis, 1.0, (crate::pixel::MAX_DIMENSION / 2) as Real);
+        c.result()
     }
 }
 

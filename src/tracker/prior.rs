@@ -22,8 +22,10 @@ pub struct ScalePrior {
 impl ScalePrior {
     pub(super) fn validate(&self) -> Result<(), ConfigError> {
         let limit = (crate::pixel::MAX_DIMENSION / 2) as Real;
-        crate::error::check("prior.half_minor", self.half_minor, 1.0, limit)?;
-        crate::error::check("prior.tolerance", self.tolerance, 0.0, limit)
+        let mut c = crate::error::Checks::new();
+        c.range("prior.half_minor", self.half_minor, 1.0, limit);
+        c.range("prior.tolerance", self.tolerance, 0.0, limit);
+        c.result()
     }
 
     /// Rescales `p` so that its shorter half axis is within the prior.
